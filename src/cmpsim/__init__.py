@@ -1,0 +1,55 @@
+"""cmpsim: wafer-scale chemical mechanical polishing simulator.
+
+Grain-flow (Haff) partial hydrodynamic lubrication through an average-flow Reynolds
+equation with roughness flow factors, plus elastic / elastoplastic / plastic asperity
+contact of the pad, on a domed, tilted wafer balanced in force and moment.
+
+Quick use::
+
+    import cmpsim
+    result = cmpsim.solve(applied_pressure="3 psi")
+    print(result.summary())
+
+``import cmpsim`` is light: numerical, plotting and parallel libraries load only in the
+functions that need them.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+__version__ = "0.1.0"
+
+__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "EquilibriumError", "__version__"]
+
+_LAZY = {
+    "Config": ("cmpsim.config", "Config"),
+    "Result": ("cmpsim.result", "Result"),
+    "solve": ("cmpsim.model", "solve"),
+    "EquilibriumError": ("cmpsim.equilibrium", "EquilibriumError"),
+    "sweep": ("cmpsim.sweeps", "sweep"),
+    "reproduce": ("cmpsim.reproduce", "reproduce"),
+    "validate": ("cmpsim.validation", "validate"),
+    "calibrate": ("cmpsim.calibration", "calibrate"),
+}
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .config import Config
+    from .equilibrium import EquilibriumError
+    from .model import solve
+    from .result import Result
+
+
+def __getattr__(name: str) -> Any:
+    if name in _LAZY:
+        import importlib
+
+        module, attr = _LAZY[name]
+        value = getattr(importlib.import_module(module), attr)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'cmpsim' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + list(_LAZY))

@@ -1,0 +1,340 @@
+"""Inputs of one operating point: frozen dataclasses, the parameter registry, parsing with units.
+
+Every input has one entry in :data:`PARAMETERS` with its section, symbol, SI unit, display
+unit, default, valid range and source. Values are stored in SI. They may be given as a
+string with units (``"4 psi"``, ``"60rpm"``, ``"100nm"``), a pint Quantity, or a plain
+number taken as SI. Every bad value raises ``ValueError`` naming the parameter and its valid
+range; the same text reaches the command line.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass, fields
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+__all__ = [
+    "Param",
+    "PARAMETERS",
+    "Wafer",
+    "Pad",
+    "Slurry",
+    "Process",
+    "Numerics",
+    "Config",
+    "parse_value",
+    "parameter_table_markdown",
+    "GRID_PRESETS",
+]
+
+#: Named grids: rings x sectors of the polar finite-volume grid (see docs/model.md, "Grid").
+GRID_PRESETS = {"coarse": (8, 24), "default": (16, 48), "fine": (32, 96)}
+
+
+@dataclass(frozen=True)
+class Param:
+    """One input: where it lives, its unit, default, valid range and source."""
+
+    name: str
+    section: str
+    symbol: str
+    unit: str  # SI unit (pint syntax); "" dimensionless; "choice" / "grid" for strings
+    display: str  # unit used in tables and the CLI
+    default: Any
+    description: str
+    source: str
+    low: float | None = None  # None = unbounded
+    high: float | None = None
+    low_open: bool = True
+    high_open: bool = True
+    choices: tuple[str, ...] = ()
+
+    def range_text(self) -> str:
+        """Human-readable valid range, in SI."""
+        if self.choices:
+            return "one of " + ", ".join(repr(c) for c in self.choices)
+        if self.unit == "grid":
+            return "'coarse', 'default', 'fine' or 'NRxNT' (rings x sectors, NR >= 3, NT even >= 8)"
+        lo = "-inf" if self.low is None else f"{self.low:g}"
+        hi = "inf" if self.high is None else f"{self.high:g}"
+        lb = "(" if (self.low is None or self.low_open) else "["
+        hb = ")" if (self.high is None or self.high_open) else "]"
+        unit = f" {self.unit}" if self.unit else ""
+        return f"{lb}{lo}, {hi}{hb}{unit}"
+
+
+_P = Param
+PARAMETERS: dict[str, Param] = {
+    p.name: p
+    for p in [
+        # ---------------------------------------------------------------- wafer
+        _P("wafer_diameter", "wafer", "2 R_w", "m", "in", 0.0762, "Wafer diameter", "Paper Table 1 (3 in)", 0.0),
+        _P("dome_height", "wafer", "delta_d", "m", "um", 5e-6, "Dome height of the convex wafer (0 = flat)", "Paper Table 1", 0.0, None, False),
+        # ---------------------------------------------------------------- process
+        _P("applied_pressure", "process", "P", "Pa", "psi", 4 * 6894.757293168361, "Applied load over wafer area", "Paper Table 1 (4 psi; range 2-6 psi)", 0.0),
+        _P("rotation_speed", "process", "Omega_p", "rad/s", "rpm", 2 * math.pi, "Pad (relative) rotation speed", "Paper Table 1 (60 rpm; range 30-90 rpm)", 0.0),
+        _P("wafer_speed_ratio", "process", "Omega_w/Omega_p", "", "", 1.0, "Wafer over pad rotation speed (1 = uniform relative velocity)", "Assumption: the paper quotes one relative rotation speed; equal speeds as in Thakurta et al. 2001 (60/60 rpm)", 0.0),
+        _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
+        _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
+        _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
+        # ---------------------------------------------------------------- slurry (Haff grain flow)
+        _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter", "Paper Table 1 (100 nm; 200 nm studied)", 0.0),
+        _P("w_over_k", "slurry", "w/k", "", "", 4e-6, "Haff dissipation over conductivity constant", "Paper Table 1 (see docs/model.md on w/k vs k/w)", 0.0),
+        _P("t_over_a", "slurry", "t/a", "", "", 1.0, "Haff pressure over viscosity constant", "Paper Table 1; Dai et al.", 0.0),
+        _P("fluctuation_ratio", "slurry", "v/U", "", "", 3.0, "Granular fluctuation velocity over sliding speed", "Paper Table 1 (V/U = 3)", 0.0),
+        _P("granular_density", "slurry", "rho", "kg/m^3", "kg/m^3", 134.0, "Bulk density of the abrasive grains (solid volume fraction x particle density)", "12.5 wt% silica (2200 kg/m^3) in water, typical oxide slurry (US 9,499,721 B2); see docs/model.md", 0.0),
+        _P("diameter_gap_ratio", "slurry", "d/s", "", "", 67.0, "Particle diameter over mean gap between grains (Haff: s << d)", "Calibrated, not measured: sets the edge granular pressure to ~32 kPa at 60 rpm; see docs/model.md ('Ambient granular pressure')", 0.0),
+        # ---------------------------------------------------------------- pad
+        _P("pad_roughness", "pad", "sigma", "m", "um", 15e-6, "Std of pad summit heights (R_q)", "Paper Table 1 (15 um; 10, 20 um studied)", 0.0),
+        _P("asperity_density", "pad", "eta_a", "1/m^2", "1/mm^2", 2.0e8, "Areal density of pad summits at the reference roughness", "Bozkaya & Mueftue, JES 156 H890 (2009); Shi & Ring, Microelectron. Eng. 87, 2368 (2010); Suzuki et al. (2017)", 0.0),
+        _P("asperity_radius", "pad", "R", "m", "um", 50e-6, "Summit radius of curvature at the reference roughness", "Bozkaya & Mueftue, JES 156 H890 (2009); Suzuki et al. (2017)", 0.0),
+        _P("pad_modulus", "pad", "E_1", "Pa", "MPa", 100e6, "Young's modulus of the pad", "Bozkaya & Mueftue, JES 156 H890 (2009)", 0.0),
+        _P("pad_poisson", "pad", "nu_1", "", "", 0.3, "Poisson ratio of the pad", "Suzuki et al., CIRP Ann. (2017)", 0.0, 0.5, False, False),
+        _P("pad_hardness", "pad", "H", "Pa", "MPa", 9.4e6, "Hardness of the pad asperities", "H/E = 0.094 of wet IC1000 (Eusner et al., JES 156 H528, 2009) times pad_modulus; see docs/model.md", 0.0),
+        _P("wafer_modulus", "pad", "E_2", "Pa", "GPa", 130e9, "Young's modulus of the wafer (silicon)", "Hopcroft, Nix & Kenny, JMEMS 19, 229 (2010)", 0.0),
+        _P("wafer_poisson", "pad", "nu_2", "", "", 0.28, "Poisson ratio of the wafer (silicon)", "Hopcroft, Nix & Kenny (2010)", 0.0, 0.5, False, False),
+        _P("contact_cutoff", "pad", "z_max/sigma", "", "", 3.0, "Summit heights truncated at this many sigma (paper: contact below 3 R_q)", "Paper section 2.2; Yu et al. [30]", 0.5, None, False),
+        _P("roughness_scaling", "pad", "-", "choice", "", "self_similar", "How summit radius and density follow pad_roughness", "docs/model.md ('Changing the pad roughness')", choices=("self_similar", "fixed_summits")),
+        _P("reference_roughness", "pad", "sigma_ref", "m", "um", 15e-6, "Roughness at which asperity_density and asperity_radius are given", "Paper base case", 0.0),
+        _P("wafer_roughness", "pad", "sigma_2", "m", "um", 0.0, "Std of wafer surface heights", "Paper: wafer smooth (sigma_2 << sigma_1)", 0.0, None, False),
+        _P("peklenik_number", "pad", "gamma", "", "", 1.0, "Peklenik number of the pad roughness (1 = isotropic)", "Paper section 3.1", 0.0),
+        _P("roughness_angle", "pad", "theta_1", "rad", "deg", 0.0, "Orientation of the pad roughness from the sliding direction", "Paper (isotropic: irrelevant)"),
+        _P("friction_coefficient", "pad", "mu", "", "", 0.4, "Coulomb friction of pad summits on the wafer", "Lai, PhD thesis MIT (2001): 0.40-0.49 in contact mode", 0.0, None, False),
+        # ---------------------------------------------------------------- numerics
+        _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
+        _P("grid", "numerics", "-", "grid", "", "default", "Polar grid: preset or rings x sectors", "docs/model.md ('Grid')"),
+        _P("flow_factor_floor", "numerics", "Phi_min", "", "", 0.05, "Smallest eigenvalue of the pressure flow-factor tensor passed to the solver", "docs/model.md ('Flow-factor validity')", 0.0, 1.0, True, False),
+        _P("tolerance", "numerics", "-", "", "", 1e-9, "Newton tolerance on the relative load and moment residuals", "-", 0.0, 1e-3, True, False),
+        _P("max_iterations", "numerics", "-", "", "", 40, "Newton steps allowed", "-", 1.0, 1000.0, False, False),
+    ]
+}
+
+_SECTIONS = ("wafer", "process", "slurry", "pad", "numerics")
+
+
+@lru_cache(maxsize=1)
+def _ureg():
+    import pint
+
+    ureg = pint.UnitRegistry()
+    return ureg
+
+
+def _check_range(p: Param, v: float) -> float:
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v) or math.isinf(v):
+        raise ValueError(f"{p.name} must be a finite number; valid range {p.range_text()}; got {v!r}")
+    if p.low is not None and (v < p.low or (p.low_open and v == p.low)):
+        raise ValueError(f"{p.name} = {v:g} {p.unit} is out of range: valid range {p.range_text()}")
+    if p.high is not None and (v > p.high or (p.high_open and v == p.high)):
+        raise ValueError(f"{p.name} = {v:g} {p.unit} is out of range: valid range {p.range_text()}")
+    if p.name == "max_iterations":
+        if int(v) != v:
+            raise ValueError(f"max_iterations must be an integer; valid range {p.range_text()}")
+        return int(v)
+    return float(v)
+
+
+def _parse_grid(value: Any) -> str:
+    s = str(value).strip().lower().replace(" ", "")
+    if s in GRID_PRESETS:
+        return s
+    parts = s.split("x")
+    ok = len(parts) == 2 and all(q.isdigit() for q in parts)
+    if ok:
+        nr, nt = int(parts[0]), int(parts[1])
+        ok = nr >= 3 and nt >= 8 and nt % 2 == 0
+    if not ok:
+        raise ValueError(f"grid must be {PARAMETERS['grid'].range_text()}; got {value!r}")
+    return f"{nr}x{nt}"
+
+
+def parse_value(name: str, value: Any) -> Any:
+    """Convert one input to its SI value, checking unit dimension and range.
+
+    ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number
+    (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
+    """
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+    p = PARAMETERS[name]
+    if p.choices:
+        s = str(value).strip()
+        if s not in p.choices:
+            raise ValueError(f"{name} must be {p.range_text()}; got {value!r}")
+        return s
+    if p.unit == "grid":
+        return _parse_grid(value)
+    if isinstance(value, bool):
+        raise ValueError(f"{name} must be a number with units of {p.unit or 'none'}; got {value!r}")
+    if isinstance(value, (int, float)):
+        return _check_range(p, value)
+    # strings and quantities go through pint
+    ureg = _ureg()
+    try:
+        q = ureg.Quantity(value) if isinstance(value, str) else value
+    except Exception as exc:  # pint raises several error types for bad strings
+        raise ValueError(f"{name}: cannot read {value!r} as a quantity ({exc}); expected units of {p.unit or 'none (dimensionless)'}") from None
+    if not hasattr(q, "to"):
+        return _check_range(p, q)
+    target = p.unit or "dimensionless"
+    try:
+        si = q.to(target).magnitude
+    except Exception:
+        raise ValueError(
+            f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r}"
+            f" (e.g. {p.display or target})"
+        ) from None
+    return _check_range(p, float(si))
+
+
+def _section_fields(section: str) -> list[str]:
+    return [n for n, p in PARAMETERS.items() if p.section == section]
+
+
+def _make_section(section: str, doc: str):
+    names = _section_fields(section)
+    cls = dataclasses.make_dataclass(
+        section.capitalize(),
+        [(n, Any, dataclasses.field(default=PARAMETERS[n].default)) for n in names],
+        frozen=True,
+    )
+    cls.__doc__ = doc + "\n\nFields (SI): " + ", ".join(f"{n} [{PARAMETERS[n].unit or '-'}]" for n in names)
+    cls.__module__ = __name__
+    return cls
+
+
+Wafer = _make_section("wafer", "Wafer geometry.")
+Process = _make_section("process", "Machine settings: load, speeds, kinematics, removal constant.")
+Slurry = _make_section("slurry", "Slurry as a Haff granular fluid.")
+Pad = _make_section("pad", "Pad surface (Greenwood-Williamson summits), pad and wafer materials.")
+Numerics = _make_section("numerics", "Model variant and numerical settings.")
+_CLASSES = {"wafer": Wafer, "process": Process, "slurry": Slurry, "pad": Pad, "numerics": Numerics}
+
+
+@dataclass(frozen=True)
+class Config:
+    """All inputs of one operating point, in SI, grouped as wafer, process, slurry, pad, numerics.
+
+    Build with :meth:`default`, :meth:`from_toml` or :meth:`replace`; every value is checked
+    on the way in. Flat attribute access works too: ``config.applied_pressure``.
+    """
+
+    wafer: Any = dataclasses.field(default_factory=Wafer)
+    process: Any = dataclasses.field(default_factory=Process)
+    slurry: Any = dataclasses.field(default_factory=Slurry)
+    pad: Any = dataclasses.field(default_factory=Pad)
+    numerics: Any = dataclasses.field(default_factory=Numerics)
+
+    @classmethod
+    def default(cls) -> "Config":
+        """The paper's base case (Table 1) plus the cited defaults of docs/model.md."""
+        return cls()
+
+    def __getattr__(self, name: str):
+        p = PARAMETERS.get(name)
+        if p is None:
+            raise AttributeError(name)
+        return getattr(object.__getattribute__(self, p.section), name)
+
+    def replace(self, **overrides) -> "Config":
+        """A copy with some inputs changed (flat names; strings with units, Quantities or SI)."""
+        groups: dict[str, dict[str, Any]] = {}
+        for name, value in overrides.items():
+            v = parse_value(name, value)
+            groups.setdefault(PARAMETERS[name].section, {})[name] = v
+        new = {s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS}
+        return Config(**new)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Flat {name: SI value} of every input."""
+        return {n: getattr(getattr(self, p.section), n) for n, p in PARAMETERS.items()}
+
+    def to_sections(self) -> dict[str, dict[str, Any]]:
+        """{section: {name: SI value}}, the layout of the TOML file."""
+        return {s: {n: getattr(getattr(self, s), n) for n in _section_fields(s)} for s in _SECTIONS}
+
+    def to_toml(self, path) -> None:
+        """Write every input to a TOML file in SI (floats written exactly); atomic."""
+        import tomli_w
+
+        from .io import atomic_write_text
+
+        text = "# cmpsim configuration; every value in SI units (see `cmpsim params`)\n"
+        text += tomli_w.dumps(self.to_sections())
+        atomic_write_text(Path(path), text)
+
+    @classmethod
+    def from_mapping(cls, data: dict[str, Any], base: "Config | None" = None) -> "Config":
+        """Build from a flat or sectioned mapping; values with units or SI numbers."""
+        flat: dict[str, Any] = {}
+        for key, value in data.items():
+            if key in _SECTIONS and isinstance(value, dict):
+                for k, v in value.items():
+                    if k not in PARAMETERS:
+                        raise ValueError(f"unknown parameter {k!r} in [{key}]; known: {', '.join(_section_fields(key))}")
+                    if PARAMETERS[k].section != key:
+                        raise ValueError(f"parameter {k!r} belongs in [{PARAMETERS[k].section}], not [{key}]")
+                    flat[k] = v
+            else:
+                flat[key] = value
+        return (base or cls.default()).replace(**flat)
+
+    @classmethod
+    def from_toml(cls, path) -> "Config":
+        """Read a TOML file (sections or flat keys; values with units or SI numbers)."""
+        path = Path(path)
+        try:
+            data = tomllib.loads(path.read_text())
+        except FileNotFoundError:
+            raise ValueError(f"config file {str(path)!r} does not exist") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
+        return cls.from_mapping(data)
+
+    @property
+    def grid_shape(self) -> tuple[int, int]:
+        """(rings, sectors) of the polar grid."""
+        g = self.numerics.grid
+        if g in GRID_PRESETS:
+            return GRID_PRESETS[g]
+        nr, nt = g.split("x")
+        return int(nr), int(nt)
+
+    def describe(self) -> list[tuple[str, str, str, str]]:
+        """Rows (name, value in display unit, display unit, source) for provenance and tables."""
+        rows = []
+        for n, p in PARAMETERS.items():
+            v = getattr(self, n)
+            rows.append((n, format_display(n, v), p.display, p.source))
+        return rows
+
+
+def to_display(name: str, value: Any) -> Any:
+    """SI value of a parameter converted to its display unit (strings unchanged)."""
+    p = PARAMETERS[name]
+    if isinstance(value, str) or not p.display or p.display == p.unit:
+        return value
+    return _ureg().Quantity(value, p.unit).to(p.display).magnitude
+
+
+def format_display(name: str, value: Any) -> str:
+    v = to_display(name, value)
+    return v if isinstance(v, str) else f"{v:.6g}"
+
+
+def parameter_table_markdown() -> str:
+    """The parameter table of docs/model.md, generated from :data:`PARAMETERS`."""
+    lines = [
+        "| name | symbol | SI unit | default | shown as | valid range (SI) | source |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for n, p in PARAMETERS.items():
+        d = p.default if isinstance(p.default, str) else f"{p.default:.6g}"
+        shown = format_display(n, p.default) + (f" {p.display}" if p.display and p.display not in ("", p.unit) else "")
+        unit = p.unit if p.unit not in ("choice", "grid", "") else "-"
+        lines.append(f"| `{n}` | {p.symbol} | {unit} | {d} | {shown} | {p.range_text()} | {p.source} |")
+    return "\n".join(lines) + "\n"

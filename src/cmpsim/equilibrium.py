@@ -1,0 +1,386 @@
+"""Force and moment equilibrium of the wafer: solve for h0, attack angle and cross tilt.
+
+For a trial position u = (h0, theta, beta) the film h(x, y) follows from the geometry
+(eq. 30), the slurry pressure from one sparse solve of the Reynolds equation, the pad
+contact pressure from the asperity kernel. The three residuals are
+
+    R_F = (integral of p dA) / (P_applied A) - 1          (eq. 31, force)
+    R_y = (integral of p x dA) / (P_applied A R_w)         (moment about the y axis)
+    R_x = (integral of p y dA) / (P_applied A R_w)         (moment about the x axis)
+
+with p = (1 - a_r) (p_slurry - p0) + p_contact, the carrier pivot at the centre of the wafer
+face (so friction has no moment arm). They are driven to zero by Newton's method. The
+Jacobian comes from the same discrete system, dphi/du = -A^-1 d(A phi - b)/du, where the
+derivative of the residual at fixed phi is a cheap finite difference of the face
+coefficients: one LU factorisation per Newton step and three back-substitutions. Steps are
+limited to a trust region on the change of the film and safeguarded by a backtracking line
+search. The start is the contact-only equilibrium at zero tilt (or, without contact, a
+bracket of the fluid-only load).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import brentq
+
+from .contact import PadSurface, asperity_contact
+from .geometry import film_thickness
+from .grid import PolarGrid
+from .reynolds import FaceCoefficients, LubricationParameters, ReynoldsSystem, lubrication_coefficients
+
+__all__ = ["WaferProblem", "PressureState", "EquilibriumSolution", "EquilibriumError", "solve_equilibrium", "MODEL_VARIANTS"]
+
+MODEL_VARIANTS = ("lep", "elastic", "hydrodynamic")
+
+
+class EquilibriumError(RuntimeError):
+    """No equilibrium was found; the message says why and what was tried."""
+
+
+@dataclass
+class PressureState:
+    """Everything computed at one trial position u = (h0, theta, beta)."""
+
+    u: np.ndarray
+    h: np.ndarray  # film thickness at cell centres, m
+    phi: np.ndarray  # ln(p / p0), cell centres
+    p_slurry: np.ndarray  # absolute granular pressure, Pa
+    p_fluid: np.ndarray  # (1 - a_r)(p - p0), Pa
+    p_contact: np.ndarray  # Pa
+    area_elastic: np.ndarray
+    area_elastoplastic: np.ndarray
+    area_plastic: np.ndarray
+    residual: np.ndarray  # (R_F, R_y, R_x)
+    system: ReynoldsSystem
+    floored_fraction: float
+
+    @property
+    def p_total(self) -> np.ndarray:
+        """Total normal pressure on the wafer (gauge), Pa."""
+        return self.p_fluid + self.p_contact
+
+    @property
+    def area_ratio(self) -> np.ndarray:
+        return self.area_elastic + self.area_elastoplastic + self.area_plastic
+
+
+@dataclass
+class EquilibriumSolution:
+    """Converged (or diagnosed) equilibrium."""
+
+    state: PressureState
+    converged: bool
+    iterations: int
+    factorizations: int
+    back_substitutions: int
+    history: list = field(default_factory=list)
+
+
+class WaferProblem:
+    """One operating point of the wafer on the polar grid.
+
+    Parameters
+    ----------
+    grid : PolarGrid
+        Grid on the wafer disk (its radius is R_w).
+    dome_height : float
+        delta_d, m.
+    applied_pressure : float
+        Applied load over wafer area, Pa (> 0).
+    ambient_pressure : float
+        Granular pressure p0 at the wafer edge, Pa (> 0).
+    lubrication : LubricationParameters
+    pad : PadSurface or None
+        Asperity description; ``None`` only for the hydrodynamic variant.
+    variant : {"lep", "elastic", "hydrodynamic"}
+    """
+
+    def __init__(
+        self,
+        grid: PolarGrid,
+        dome_height: float,
+        applied_pressure: float,
+        ambient_pressure: float,
+        lubrication: LubricationParameters,
+        pad: PadSurface | None,
+        variant: str = "lep",
+        separation_offset: float = 0.0,
+    ):
+        if variant not in MODEL_VARIANTS:
+            raise ValueError(f"model must be one of {MODEL_VARIANTS}; got {variant!r}")
+        if not (np.isfinite(applied_pressure) and applied_pressure > 0):
+            raise ValueError(f"applied_pressure must be > 0 Pa; got {applied_pressure!r}")
+        if not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
+            raise ValueError(f"ambient granular pressure must be > 0 Pa; got {ambient_pressure!r}")
+        if variant != "hydrodynamic" and pad is None:
+            raise ValueError(f"model {variant!r} needs a PadSurface")
+        self.grid = grid
+        self.dome_height = dome_height
+        self.applied_pressure = applied_pressure
+        self.p0 = ambient_pressure
+        self.lub = lubrication
+        self.pad = pad
+        self.variant = variant
+        self.separation_offset = separation_offset
+        self.sigma = lubrication.roughness.sigma
+        R = grid.radius
+        self.xc, self.yc = grid.centres
+        self.xr, self.yr, _ = grid.radial_faces
+        self.xa, self.ya, _ = grid.angular_faces
+        self.load_scale = applied_pressure * np.pi * R * R
+        # scaling of the unknowns: h0 in sigma, tilts in sigma / R_w
+        self.u_scale = np.array([self.sigma, self.sigma / R, self.sigma / R])
+        self.factorizations = 0
+        self.back_substitutions = 0
+
+    # ------------------------------------------------------------------ geometry
+    def film(self, u, x, y) -> np.ndarray:
+        """Film thickness at points (x, y) for position u = (h0, theta, beta), m."""
+        return film_thickness(x, y, u[0], u[1], self.dome_height, self.grid.radius, cross_tilt=u[2])
+
+    def face_coefficients(self, u) -> FaceCoefficients:
+        """Reynolds coefficients on all faces at position u."""
+        rad = lubrication_coefficients(self.film(u, self.xr, self.yr), self.xr, self.yr, self.lub)
+        ang = lubrication_coefficients(self.film(u, self.xa, self.ya), self.xa, self.ya, self.lub)
+        floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
+        return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
+
+    def contact(self, h):
+        """Asperity contact at film thickness h (zero for the hydrodynamic variant)."""
+        if self.variant == "hydrodynamic":
+            z = np.zeros_like(h)
+            return z, z, z, z
+        c = asperity_contact(h - self.separation_offset, self.pad, model=self.variant)
+        return c.pressure, c.area_ratio_elastic, c.area_ratio_elastoplastic, c.area_ratio_plastic
+
+    # ------------------------------------------------------------------ residuals
+    def _residual(self, p_total) -> np.ndarray:
+        g = self.grid
+        f = g.integrate(p_total) / self.load_scale - 1.0
+        my = g.integrate(p_total * self.xc) / (self.load_scale * g.radius)
+        mx = g.integrate(p_total * self.yc) / (self.load_scale * g.radius)
+        return np.array([f, my, mx])
+
+    def _combine(self, h, phi):
+        pc, ae, aep, ap = self.contact(h)
+        ar = ae + aep + ap
+        p_abs = self.p0 * np.exp(phi)
+        p_fluid = (1.0 - ar) * (p_abs - self.p0)
+        return p_abs, p_fluid, pc, ae, aep, ap
+
+    def state(self, u) -> PressureState:
+        """Solve the Reynolds equation and evaluate contact and residuals at position u."""
+        u = np.asarray(u, dtype=float)
+        h = self.film(u, self.xc, self.yc)
+        coeffs = self.face_coefficients(u)
+        system = ReynoldsSystem(self.grid, coeffs)
+        phi = system.solve()
+        self.factorizations += 1
+        if not np.all(np.isfinite(phi)) or phi.max() > 600.0:
+            raise ValueError(
+                f"the slurry pressure diverges (ln(p/p0) up to {np.nanmax(phi):.3g}) at a minimum film of "
+                f"{h.min() / self.sigma:.3g} sigma; flow factors regularised on "
+                f"{100 * coeffs.floored / max(coeffs.n_faces, 1):.0f} % of the faces"
+            )
+        p_abs, p_fluid, pc, ae, aep, ap = self._combine(h, phi)
+        res = self._residual(p_fluid + pc)
+        return PressureState(
+            u, h, phi, p_abs, p_fluid, pc, ae, aep, ap, res, system, coeffs.floored / max(coeffs.n_faces, 1)
+        )
+
+    def jacobian(self, st: PressureState, rel_step: float = 1e-6) -> np.ndarray:
+        """d(residual)/du at a solved state: 3 coefficient re-evaluations, 3 back-substitutions."""
+        J = np.empty((3, 3))
+        base = st.system.residual(st.phi)
+        for k in range(3):
+            du = np.zeros(3)
+            du[k] = rel_step * self.u_scale[k]
+            u = st.u + du
+            h = self.film(u, self.xc, self.yc)
+            pert = ReynoldsSystem(self.grid, self.face_coefficients(u))
+            dr = pert.residual(st.phi) - base
+            dphi = -st.system.factor.solve(dr).reshape(st.phi.shape)
+            self.back_substitutions += 1
+            _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi)
+            J[:, k] = (self._residual(p_fluid + pc) - st.residual) / du[k]
+        return J
+
+    # ------------------------------------------------------------------ starts
+    def contact_only_start(self) -> np.ndarray:
+        """h0 at zero tilt for which the pad contact alone carries the applied load."""
+        shape = self.film(np.zeros(3), self.xc, self.yc)  # h - h0 at u = 0
+
+        def excess(h0):
+            pc = self.contact(h0 + shape)[0]
+            return self.grid.integrate(pc) / self.load_scale - 1.0
+
+        h_lo = -shape.min() + 1e-3 * self.sigma  # smallest h0 with a positive film everywhere
+        cutoff = self.pad.height_cutoff if np.isfinite(self.pad.height_cutoff) else 12.0
+        h_hi = -shape.max() + self.separation_offset + cutoff * self.pad.sigma_s
+        if excess(h_lo) < 0:
+            raise EquilibriumError(
+                "the applied load exceeds what the pad asperities can carry before the wafer "
+                f"touches the pad mean plane (contact pressure at zero film is {excess(h_lo) + 1:.3g} "
+                "x the applied pressure); lower applied_pressure or stiffen the pad"
+            )
+        h0 = brentq(excess, h_lo, max(h_hi, h_lo * 1.0001 + 1e-12), xtol=1e-6 * self.sigma, rtol=1e-12)
+        return np.array([h0, 0.0, 0.0])
+
+    def fluid_start(self) -> np.ndarray:
+        """h0 at zero tilt bracketing the fluid-only load (hydrodynamic variant)."""
+        shape = self.film(np.zeros(3), self.xc, self.yc)
+        h_lo = -shape.min() + 0.5 * self.sigma
+        vals = []
+        for factor in (1.0, 1.5, 2.0, 3.0, 5.0, 8.0):
+            h0 = h_lo * factor + (factor - 1.0) * self.sigma
+            vals.append((h0, self.state([h0, 0.0, 0.0]).residual[0]))
+        for (a, fa), (b, fb) in zip(vals, vals[1:]):
+            if fa > 0 >= fb or fa < 0 <= fb:
+                return np.array([a + (b - a) * fa / (fa - fb), 0.0, 0.0])
+        best = min(vals, key=lambda v: abs(v[1]))
+        return np.array([best[0], 0.0, 0.0])
+
+
+def _merit(r: np.ndarray) -> float:
+    return float(np.max(np.abs(r)))
+
+
+def _diagnosis(problem: WaferProblem, st: PressureState) -> str:
+    hs = st.h.min() / problem.sigma
+    text = (
+        f"last position h0 = {st.u[0]:.6g} m, attack angle = {st.u[1]:.4g} rad, cross tilt = {st.u[2]:.4g} rad; "
+        f"residuals (load, moment_y, moment_x) = ({st.residual[0]:.3g}, {st.residual[1]:.3g}, {st.residual[2]:.3g}); "
+        f"minimum film {hs:.3g} sigma"
+    )
+    if st.floored_fraction > 0:
+        text += (
+            f"; the flow-factor tensor was regularised on {100 * st.floored_fraction:.0f} % of the faces, i.e. the film "
+            "is outside the validity of the perturbation flow factors (docs/model.md)"
+        )
+    return text
+
+
+def balance_load(problem: WaferProblem, u, max_expansions: int = 40) -> np.ndarray:
+    """Adjust h0 at fixed tilts until the load balances (bracket + Brent); the Newton safeguard.
+
+    Positions where the film touches the pad or the pressure diverges count as
+    overloaded (residual +inf). Returns the new u; raises EquilibriumError if no bracket
+    is found.
+    """
+    u = np.asarray(u, dtype=float)
+    sigma = problem.sigma
+
+    def load(h0):
+        try:
+            return problem.state([h0, u[1], u[2]]).residual[0]
+        except ValueError:
+            return np.inf
+
+    a, fa = u[0], load(u[0])
+    step = 0.25 * sigma
+    direction = 1.0 if fa > 0 else -1.0
+    for _ in range(max_expansions):
+        b = a + direction * step
+        fb = load(b)
+        if np.sign(fb) != np.sign(fa):
+            break
+        a, fa = b, fb
+        step *= 1.6
+    else:
+        raise EquilibriumError(
+            f"no film thickness balances the load at attack angle {u[1]:.3g} rad: the load residual keeps "
+            f"the sign of {fa:.3g} from h0 = {u[0]:.4g} m to {a:.4g} m"
+        )
+    lo, hi = sorted((a, b))
+    flo, fhi = (fa, fb) if a < b else (fb, fa)
+    # shrink an infinite end with bisection so that brentq sees finite values
+    for _ in range(60):
+        if np.isfinite(flo) and np.isfinite(fhi):
+            break
+        mid = 0.5 * (lo + hi)
+        fm = load(mid)
+        if np.sign(fm) == np.sign(flo):
+            lo, flo = mid, fm
+        else:
+            hi, fhi = mid, fm
+    h0 = brentq(load, lo, hi, xtol=1e-6 * sigma, rtol=1e-14, maxiter=200)
+    return np.array([h0, u[1], u[2]])
+
+
+def solve_equilibrium(
+    problem: WaferProblem,
+    start=None,
+    tol: float = 1e-9,
+    max_iter: int = 40,
+    max_step: float = 0.5,
+) -> EquilibriumSolution:
+    """Newton iteration on (h0, theta, beta) with trust region and backtracking.
+
+    Parameters
+    ----------
+    problem : WaferProblem
+    start : array_like, optional
+        Initial (h0 [m], theta [rad], beta [rad]); default: contact-only start (or fluid
+        bracket for the hydrodynamic variant).
+    tol : float
+        Convergence when max |R| < tol (relative load and moment residuals).
+    max_iter : int
+        Newton steps allowed.
+    max_step : float
+        Trust region: no step changes h0, or the film at the wafer edge through a tilt, by
+        more than ``max_step`` sigma.
+
+    Raises
+    ------
+    EquilibriumError
+        If the film would have to touch the pad, or Newton cannot reduce the residual.
+    """
+    if start is None:
+        start = problem.fluid_start() if problem.variant == "hydrodynamic" else problem.contact_only_start()
+    u = np.asarray(start, dtype=float).copy()
+    try:
+        st = problem.state(u)
+    except ValueError:
+        st = None
+    if st is None or abs(st.residual[0]) > 0.25:
+        # far from balance (e.g. the slurry adds a large load to the contact-only start):
+        # first balance the load by bracketing h0, then let Newton do the rest
+        u = balance_load(problem, u)
+        st = problem.state(u)
+    history = [(u.copy(), st.residual.copy())]
+    it = 0
+    while _merit(st.residual) >= tol:
+        if it >= max_iter:
+            raise EquilibriumError(f"Newton did not converge in {max_iter} steps; {_diagnosis(problem, st)}")
+        it += 1
+        J = problem.jacobian(st)
+        try:
+            step = -np.linalg.solve(J, st.residual)
+        except np.linalg.LinAlgError as exc:
+            raise EquilibriumError(f"singular Jacobian at h0 = {u[0]:.6g} m: {exc}") from exc
+        scaled = np.abs(step) / problem.u_scale
+        if scaled.max() > max_step:
+            step *= max_step / scaled.max()
+        alpha = 1.0
+        reason = ""
+        for _ in range(30):
+            trial = u + alpha * step
+            try:
+                new = problem.state(trial)
+            except ValueError as exc:
+                reason = f" ({exc})"
+                alpha *= 0.5
+                continue
+            if np.linalg.norm(new.residual) < (1.0 - 1e-4 * alpha) * np.linalg.norm(st.residual):
+                break
+            alpha *= 0.5
+        else:
+            raise EquilibriumError(
+                "line search failed: no step along the Newton direction lowers the residual; the "
+                f"equilibrium may not exist for these inputs{reason}; {_diagnosis(problem, st)}"
+            )
+        u, st = trial, new
+        history.append((u.copy(), st.residual.copy()))
+    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)

@@ -1,0 +1,301 @@
+"""Verification of the statistical asperity contact (paper eq. 20-29, corrected).
+
+The reference :func:`contact_reference_mp` re-implements the per-asperity laws (Hertz,
+Zhao-Maietta-Chang, Abbott-Firestone) in mpmath, independently of the kernel, and
+integrates them over the truncated, renormalised Gaussian summit-height density with
+adaptive mpmath quadrature (tanh-sinh), broken at D, D + omega_e, D + omega_p and the
+cutoff.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mpmath as mp
+import numpy as np
+import pytest
+
+from cmpsim.contact import PadSurface, asperity_contact, asperity_laws
+
+#: The feasibility prototype's pad: omega_e = 0.20 sigma, omega_p = 11 sigma.
+PAD_SOFT = PadSurface(15e-6, 1e8, 50e-6, 110e6, 20e6, 0.3)
+#: A stiffer pad: omega_e = 0.0025 sigma, omega_p = 0.13 sigma (all three regimes in play).
+PAD_STIFF = PadSurface(15e-6, 1e8, 50e-6, 1e9, 20e6, 0.3)
+#: Another material (nu = 0.45), rougher and denser, untruncated heights.
+PAD_OTHER_INF = PadSurface(20e-6, 3e8, 30e-6, 300e6, 25e6, 0.45, height_cutoff=np.inf)
+PAD_SOFT_INF = PadSurface(15e-6, 1e8, 50e-6, 110e6, 20e6, 0.3, height_cutoff=np.inf)
+
+PADS = {"soft": PAD_SOFT, "stiff": PAD_STIFF, "soft_inf": PAD_SOFT_INF, "other_inf": PAD_OTHER_INF}
+MODELS = ("lep", "elastic")
+QUANTITIES = ("pressure", "area_ratio_elastic", "area_ratio_elastoplastic", "area_ratio_plastic")
+
+
+# --- independent mpmath reference ---------------------------------------------------------
+def _mp_pad(pad: PadSurface):
+    """Pad constants in mpmath, from the raw inputs (eq. 27; omega_p = 54 omega_e)."""
+    R, E, H = mp.mpf(pad.asperity_radius), mp.mpf(pad.e_star), mp.mpf(pad.hardness)
+    K = mp.mpf("0.454") + mp.mpf("0.41") * mp.mpf(pad.poisson)
+    w_e = (3 * mp.pi * K * H / (4 * E)) ** 2 * R
+    return R, E, H, K, w_e, 54 * w_e
+
+
+def laws_mp(omega, pad: PadSurface, model: str):
+    """Per-asperity (area, load, regime) of one summit with interference ``omega`` (m), in mpmath."""
+    R, E, H, K, w_e, w_p = _mp_pad(pad)
+    omega = mp.mpf(omega)
+    if omega <= 0:
+        return mp.mpf(0), mp.mpf(0), 0
+    if model == "elastic" or omega < w_e:  # Hertz / Greenwood-Williamson
+        return mp.pi * R * omega, mp.mpf(4) / 3 * E * mp.sqrt(R) * omega**1.5, 1
+    if omega < w_p:  # Zhao-Maietta-Chang
+        u = (omega - w_e) / (w_p - w_e)
+        area = mp.pi * R * omega * (1 - 2 * u**3 + 3 * u**2)
+        p_mean = H * (1 - (1 - K) * (mp.log(w_p) - mp.log(omega)) / (mp.log(w_p) - mp.log(w_e)))
+        return area, p_mean * area, 2
+    area = 2 * mp.pi * R * omega  # Abbott-Firestone
+    return area, H * area, 3
+
+
+def gaussian_breakpoints(lo, hi):
+    """Breakpoints for integrating smooth(zeta) * phi(zeta) over [lo, hi] (hi may be inf).
+
+    Tanh-sinh quadrature over a Gaussian tail is unreliable (mp.quad over [14, inf] of
+    (zeta - 3) phi is off by 4e-5), so the band is split at the peak m of phi on it and at
+    m +- k / max(|m|, 1), k = 1/2 ... 32: each piece then sees phi vary by a bounded factor.
+    An infinite end is cut at m + 64 / max(|m|, 1), beyond which phi / phi(m) < exp(-64).
+    """
+    m = min(max(lo, mp.mpf(0)), hi)
+    scale = 1 / max(abs(m), mp.mpf(1))
+    hi = min(hi, m + 64 * scale)
+    pts = {lo, hi}
+    for k in (0.5, 1, 2, 4, 8, 16, 32):
+        for p in (m - k * scale, m + k * scale):
+            if lo < p < hi:
+                pts.add(p)
+    return sorted(pts)
+
+
+def contact_reference_mp(separation: float, pad: PadSurface, model: str = "lep", dps: int = 20):
+    """Nominal pressure (Pa) and the three area ratios at separation D (m), adaptive mpmath.
+
+    Summit heights zeta = z / sigma_s follow phi(zeta) / Phi(c) on (-inf, c], c the cutoff.
+    """
+    with mp.workdps(dps):
+        s = mp.mpf(pad.sigma_s)
+        eta = mp.mpf(pad.asperity_density)
+        _, _, _, _, w_e, w_p = _mp_pad(pad)
+        cut = mp.inf if math.isinf(pad.height_cutoff) else mp.mpf(pad.height_cutoff)
+        norm = mp.ncdf(cut) if cut != mp.inf else mp.mpf(1)
+        delta = mp.mpf(separation) / s
+
+        def integral(lo, hi, which):
+            hi = min(hi, cut)
+            if hi <= lo:
+                return mp.mpf(0)
+
+            def integrand(zeta):
+                area, load, _ = laws_mp(s * (zeta - delta), pad, model)
+                return (area if which == "area" else load) * mp.npdf(zeta)
+
+            return eta / norm * mp.quad(integrand, gaussian_breakpoints(lo, hi))
+
+        if model == "elastic":
+            bands = {"el": (delta, cut), "ep": None, "pl": None}
+        else:
+            bands = {
+                "el": (delta, delta + w_e / s),
+                "ep": (delta + w_e / s, delta + w_p / s),
+                "pl": (delta + w_p / s, cut),
+            }
+        out = {"pressure": mp.mpf(0)}
+        for band, name in (("el", "elastic"), ("ep", "elastoplastic"), ("pl", "plastic")):
+            lim = bands[band]
+            out[f"area_ratio_{name}"] = integral(*lim, "area") if lim else mp.mpf(0)
+            out["pressure"] += integral(*lim, "load") if lim else mp.mpf(0)
+        return out
+
+
+def _separations(pad: PadSurface) -> np.ndarray:
+    """D / sigma from -10 to just below 3, with points straddling every band edge."""
+    c = 3.0
+    we, wp = pad.omega_e / pad.sigma_s, pad.omega_p / pad.sigma_s
+    edges = [c - wp, c - we]
+    extra = [e + d for e in edges for d in (-1e-3, 1e-3) if -10 < e + d < c]
+    d = np.concatenate([np.linspace(-10.0, 2.5, 9), extra, [2.9, 2.99, 3.0 - 1e-4, 3.0 - 1e-7]])
+    return np.sort(d)
+
+
+def _rel(got: float, ref) -> float:
+    if ref == 0:
+        return 0.0 if got == 0 else math.inf
+    return float(abs((mp.mpf(got) - ref) / ref))
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("pad_name", list(PADS))
+def test_pressure_and_area_ratios_match_adaptive_mpmath_quadrature_to_1e_8_from_minus_10_to_3_sigma(
+    pad_name, model
+):
+    pad = PADS[pad_name]
+    delta = _separations(pad)
+    res = asperity_contact(delta * pad.sigma_s, pad, model)
+    worst = {q: (0.0, None) for q in QUANTITIES}
+    nonzero = {q: 0 for q in QUANTITIES}
+    for i, dl in enumerate(delta):
+        ref = contact_reference_mp(float(dl * pad.sigma_s), pad, model)
+        for q in QUANTITIES:
+            got = float(getattr(res, q)[i])
+            nonzero[q] += ref[q] != 0
+            r = _rel(got, ref[q])
+            if r > worst[q][0]:
+                worst[q] = (r, float(dl))
+    assert max(w for w, _ in worst.values()) <= 1e-8, worst
+    # the comparison exercised the regimes this pad and model can reach
+    assert nonzero["pressure"] == len(delta) and nonzero["area_ratio_elastic"] == len(delta)
+    if model == "lep":
+        assert nonzero["area_ratio_elastoplastic"] > 0 and nonzero["area_ratio_plastic"] > 0
+    else:
+        assert nonzero["area_ratio_elastoplastic"] == nonzero["area_ratio_plastic"] == 0
+
+
+# --- per-asperity laws ---------------------------------------------------------------------
+@pytest.mark.parametrize("pad_name", ["soft", "stiff", "other_inf"])
+def test_per_asperity_area_and_load_are_continuous_at_omega_e_and_omega_p(pad_name):
+    pad = PADS[pad_name]
+    for edge, regimes in ((pad.omega_e, (1, 2)), (pad.omega_p, (2, 3))):
+        w = edge * np.array([1 - 1e-12, 1 + 1e-12])
+        area, load, regime = asperity_laws(w, pad, "lep")
+        assert tuple(regime) == regimes
+        assert abs(area[1] - area[0]) <= 1e-9 * area[0]
+        assert abs(load[1] - load[0]) <= 1e-9 * load[0]
+
+
+@pytest.mark.parametrize("pad_name", ["soft", "stiff", "other_inf"])
+def test_hertz_mean_pressure_at_omega_e_equals_k_times_hardness(pad_name):
+    pad = PADS[pad_name]
+    K = 0.454 + 0.41 * pad.poisson
+    assert pad.k_factor == pytest.approx(K, rel=1e-15)
+    # eq. 27 is exactly where (4 E' / (3 pi)) sqrt(omega / R) reaches K H
+    hertz_pm = 4 * pad.e_star / (3 * math.pi) * math.sqrt(pad.omega_e / pad.asperity_radius)
+    assert hertz_pm == pytest.approx(K * pad.hardness, rel=1e-14)
+    area, load, regime = asperity_laws(pad.omega_e * (1 - 1e-12), pad, "lep")
+    assert int(regime) == 1
+    assert float(load / area) == pytest.approx(K * pad.hardness, rel=1e-11)
+    assert pad.omega_p == pytest.approx(54 * pad.omega_e, rel=1e-15)
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_per_asperity_laws_match_the_mpmath_transcription_in_every_regime(model):
+    pad = PAD_STIFF
+    w = pad.omega_e * np.array([-1.0, 0.0, 1e-6, 0.5, 0.999, 1.0, 2.0, 30.0, 53.9, 54.0, 60.0, 1e3])
+    area, load, regime = asperity_laws(w, pad, model)
+    for i, wi in enumerate(w):
+        a_ref, l_ref, r_ref = laws_mp(float(wi), pad, model)
+        assert int(regime[i]) == r_ref
+        assert _rel(float(area[i]), a_ref) <= 1e-13 and _rel(float(load[i]), l_ref) <= 1e-13
+
+
+# --- the load as a function of the separation -----------------------------------------------
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("pad_name", ["soft", "stiff"])
+def test_load_vanishes_continuously_like_distance_to_cutoff_to_the_5_2_and_is_zero_beyond(pad_name, model):
+    pad = PADS[pad_name]
+    s, c = pad.sigma_s, pad.height_cutoff
+    eps = np.array([1e-4, 2e-4, 1e-7, 1e-12])
+    p = asperity_contact((c - eps) * s, pad, model).pressure
+    p_mid = float(asperity_contact(0.0, pad, model).pressure)
+    assert np.all(p > 0)
+    assert p[0] / p[1] == pytest.approx(2**-2.5, rel=1e-3)  # elastic summits, P ~ eps^(5/2)
+    assert p[2] < 1e-15 * p_mid and p[3] < 1e-27 * p_mid
+    beyond = asperity_contact(np.array([c, c + 1e-12, c + 0.5, 50.0]) * s, pad, model)
+    for q in QUANTITIES:
+        assert np.all(getattr(beyond, q) == 0.0), q
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("pad_name", list(PADS))
+def test_pressure_and_real_area_strictly_decrease_with_separation(pad_name, model):
+    pad = PADS[pad_name]
+    top = 2.999 if np.isfinite(pad.height_cutoff) else 6.0
+    d = np.linspace(-10.0, top, 3001) * pad.sigma_s
+    res = asperity_contact(d, pad, model)
+    assert np.all(np.diff(res.pressure) < 0)
+    assert np.all(np.diff(res.area_ratio) < 0)
+
+
+def test_untruncated_pad_has_contact_beyond_3_sigma_and_truncated_pad_has_none():
+    d = np.array([3.5, 5.0]) * PAD_SOFT.sigma_s
+    assert np.all(asperity_contact(d, PAD_SOFT_INF).pressure > 0)
+    assert np.all(asperity_contact(d, PAD_SOFT).pressure == 0)
+
+
+@pytest.mark.parametrize("pad_name", list(PADS))
+def test_elastic_model_has_identically_zero_elastoplastic_and_plastic_parts(pad_name):
+    pad = PADS[pad_name]
+    res = asperity_contact(np.linspace(-10, 3, 50) * pad.sigma_s, pad, "elastic")
+    for q in ("area_ratio_elastoplastic", "area_ratio_plastic", "pressure_elastoplastic", "pressure_plastic"):
+        assert np.all(getattr(res, q) == 0.0), q
+    np.testing.assert_array_equal(res.pressure, res.pressure_elastic)
+    np.testing.assert_array_equal(res.area_ratio, res.area_ratio_elastic)
+
+
+@pytest.mark.parametrize("pad_name", ["soft", "stiff"])
+def test_pressure_is_the_sum_of_its_parts_and_plastic_pressure_is_hardness_times_plastic_area(pad_name):
+    pad = PADS[pad_name]
+    res = asperity_contact(np.linspace(-10, 3, 50) * pad.sigma_s, pad, "lep")
+    np.testing.assert_allclose(
+        res.pressure, res.pressure_elastic + res.pressure_elastoplastic + res.pressure_plastic, rtol=1e-15
+    )
+    np.testing.assert_allclose(res.pressure_plastic, pad.hardness * res.area_ratio_plastic, rtol=1e-15)
+    # the elastoplastic mean pressure lies between K H and H
+    ep = res.area_ratio_elastoplastic > 0
+    pm = res.pressure_elastoplastic[ep] / res.area_ratio_elastoplastic[ep]
+    assert np.all((pm >= pad.k_factor * pad.hardness) & (pm <= pad.hardness))
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_output_shapes_follow_the_separation_shape_scalar_1d_2d(model):
+    pad = PAD_STIFF
+    grid = np.linspace(-2.0, 2.9, 12).reshape(3, 4) * pad.sigma_s
+    res2 = asperity_contact(grid, pad, model)
+    res1 = asperity_contact(grid.ravel(), pad, model)
+    res0 = asperity_contact(float(grid[1, 2]), pad, model)
+    for q in QUANTITIES + ("pressure_elastic", "pressure_elastoplastic", "pressure_plastic", "area_ratio"):
+        a2, a1, a0 = getattr(res2, q), getattr(res1, q), getattr(res0, q)
+        assert a2.shape == (3, 4) and a1.shape == (12,) and np.shape(a0) == ()
+        np.testing.assert_array_equal(a2.ravel(), a1)
+        assert float(a0) == a2[1, 2]
+    area, load, regime = asperity_laws(np.ones((2, 5)) * pad.omega_e, pad, model)
+    assert area.shape == load.shape == regime.shape == (2, 5)
+
+
+# --- argument checking -----------------------------------------------------------------------
+_GOOD = dict(sigma_s=15e-6, asperity_density=1e8, asperity_radius=50e-6, e_star=110e6, hardness=20e6, poisson=0.3)
+
+
+@pytest.mark.parametrize(
+    "name, bad",
+    [
+        ("sigma_s", 0.0), ("sigma_s", -1e-6), ("sigma_s", np.nan), ("sigma_s", np.inf),
+        ("asperity_density", 0.0), ("asperity_density", np.nan),
+        ("asperity_radius", -50e-6), ("asperity_radius", np.inf),
+        ("e_star", 0.0), ("e_star", np.nan),
+        ("hardness", -20e6), ("hardness", np.inf),
+        ("poisson", -0.1), ("poisson", 0.51), ("poisson", np.nan),
+        ("height_cutoff", 0.4), ("height_cutoff", -3.0), ("height_cutoff", np.nan),
+    ],
+)
+def test_invalid_pad_surface_argument_raises_value_error_naming_it(name, bad):
+    with pytest.raises(ValueError, match=name):
+        PadSurface(**{**_GOOD, name: bad})
+
+
+def test_unknown_model_non_finite_separation_and_non_pad_raise_value_error_naming_the_argument():
+    with pytest.raises(ValueError, match="model"):
+        asperity_contact(0.0, PAD_SOFT, "plastic")
+    with pytest.raises(ValueError, match="model"):
+        asperity_laws(1e-6, PAD_SOFT, "hertz")
+    with pytest.raises(ValueError, match="separation"):
+        asperity_contact(np.array([0.0, np.nan]), PAD_SOFT)
+    with pytest.raises(ValueError, match="pad"):
+        asperity_contact(0.0, _GOOD)
