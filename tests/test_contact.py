@@ -93,11 +93,19 @@ def contact_reference_mp(separation: float, pad: PadSurface, model: str = "lep",
             if hi <= lo:
                 return mp.mpf(0)
 
-            def integrand(zeta):
-                area, load, _ = laws_mp(s * (zeta - delta), pad, model)
-                return (area if which == "area" else load) * mp.npdf(zeta)
+            pick = 0 if which == "area" else 1
 
-            return eta / norm * mp.quad(integrand, gaussian_breakpoints(lo, hi))
+            def integrand(zeta):
+                return laws_mp(s * (zeta - delta), pad, model)[pick] * mp.npdf(zeta)
+
+            pts = gaussian_breakpoints(lo, hi)
+            # mp.quad's tolerance is absolute: scale the integrand to O(1) at the largest of
+            # its values at the breakpoints (interior points of the first and last pieces
+            # stand in for the ends, where the law may vanish)
+            probes = pts[1:-1] + [(pts[0] + pts[1]) / 2, (pts[-2] + pts[-1]) / 2]
+            ref = max(integrand(z) for z in probes)
+
+            return eta / norm * ref * mp.quad(lambda z: integrand(z) / ref, pts)
 
         if model == "elastic":
             bands = {"el": (delta, cut), "ep": None, "pl": None}

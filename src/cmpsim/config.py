@@ -32,7 +32,7 @@ __all__ = [
 ]
 
 #: Named grids: rings x sectors of the polar finite-volume grid (see docs/model.md, "Grid").
-GRID_PRESETS = {"coarse": (8, 24), "default": (16, 48), "fine": (32, 96)}
+GRID_PRESETS = {"coarse": (8, 24), "default": (24, 64), "fine": (48, 128)}
 
 
 @dataclass(frozen=True)
@@ -81,6 +81,7 @@ PARAMETERS: dict[str, Param] = {
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
+        _P("removal_shear", "process", "-", "choice", "", "total", "Shear stress tau of the removal law: slurry plus pad-summit friction, or slurry only (Runnels & Eyman)", "docs/model.md ('Removal rate')", choices=("total", "slurry")),
         # ---------------------------------------------------------------- slurry (Haff grain flow)
         _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter", "Paper Table 1 (100 nm; 200 nm studied)", 0.0),
         _P("w_over_k", "slurry", "w/k", "", "", 4e-6, "Haff dissipation over conductivity constant", "Paper Table 1 (see docs/model.md on w/k vs k/w)", 0.0),

@@ -39,7 +39,7 @@ from functools import cached_property
 import numpy as np
 from scipy.special import ndtr
 
-__all__ = ["PadSurface", "ContactResult", "asperity_contact", "asperity_laws", "MODELS"]
+__all__ = ["PadSurface", "ContactResult", "ContactTable", "asperity_contact", "asperity_laws", "MODELS"]
 
 MODELS = ("lep", "elastic")
 
@@ -315,3 +315,97 @@ def asperity_contact(separation, pad: PadSurface, model: str = "lep") -> Contact
         area_ratio_elastoplastic=out(a_r_ep),
         area_ratio_plastic=out(a_r_pl),
     )
+
+
+class ContactTable:
+    """Piecewise cubic-spline tabulation of :func:`asperity_contact` for one pad.
+
+    The contact outputs depend on the separation D alone, so an equilibrium that needs them
+    at every grid node of every Newton step interpolates them from one table built with the
+    quadrature kernel. The outputs are smooth in D except where a regime boundary of the
+    summit laws meets the height cutoff c: at D = c - omega_p and D = c - omega_e (the
+    per-summit load is only continuous there, so the integrals are C^1), and at D = c, where
+    they vanish like (c - D)^(5/2) (loads) and (c - D)^2 (areas). The table therefore has
+    its breakpoints exactly at those separations, and on the last piece it interpolates the
+    outputs divided by those powers of (c - D), which are smooth.
+
+    Separations below ``lower * sigma_s`` fall back to the kernel; at and beyond the cutoff
+    the contact is exactly zero. :attr:`error_bound` is the largest interpolation error found
+    at the midpoints between nodes, relative to the contact pressure at zero separation.
+    """
+
+    _POWERS = {"pressure": 2.5, "pressure_elastic": 2.5, "pressure_elastoplastic": 2.5, "pressure_plastic": 2.5}
+
+    def __init__(self, pad: PadSurface, model: str = "lep", nodes_per_piece: int = 600, lower: float = -6.0):
+        from scipy.interpolate import CubicSpline
+
+        _check_model(model)
+        if not np.isfinite(pad.height_cutoff):
+            raise ValueError("ContactTable needs a finite height_cutoff; use asperity_contact directly")
+        self.pad, self.model = pad, model
+        s = pad.sigma_s
+        self.cutoff = pad.height_cutoff * s
+        self.d_min = lower * s
+        breaks = [self.d_min]
+        if model == "lep":
+            breaks += [b for b in (self.cutoff - pad.omega_p, self.cutoff - pad.omega_e) if self.d_min < b < self.cutoff]
+        breaks.append(self.cutoff)
+        self._breaks = np.array(breaks)
+        self._names = list(ContactResult.__dataclass_fields__)
+        self._pieces = []
+        worst = 0.0
+        scale = float(asperity_contact(np.array([0.0]), pad, model).pressure[0])
+        area_scale = max(float(asperity_contact(np.array([0.0]), pad, model).area_ratio[0]), 1e-300)
+        for k, (a, b) in enumerate(zip(self._breaks[:-1], self._breaks[1:])):
+            last = k == len(self._breaks) - 2
+            # cluster nodes towards the ends (Chebyshev-like) for the singular behaviour there
+            t = 0.5 * (1.0 - np.cos(np.linspace(0.0, np.pi, nodes_per_piece)))
+            x = a + (b - a) * t
+            if last:
+                x = x[:-1]  # the cutoff itself is a zero of the weight
+            exact = asperity_contact(x, pad, model)
+            splines = {}
+            for name in self._names:
+                vals = getattr(exact, name)
+                if last:
+                    vals = vals / self._weight(name, x)
+                splines[name] = CubicSpline(x, vals)
+            self._pieces.append((a, b, last, splines))
+            mid = 0.5 * (x[1:] + x[:-1])
+            ref = asperity_contact(mid, pad, model)
+            got = self._evaluate_piece(self._pieces[-1], mid)
+            worst = max(
+                worst,
+                float(np.max(np.abs(got["pressure"] - ref.pressure))) / scale,
+                float(np.max(np.abs(got["area_ratio_elastic"] + got["area_ratio_elastoplastic"] + got["area_ratio_plastic"] - ref.area_ratio))) / area_scale,
+            )
+        self.error_bound = worst
+
+    def _weight(self, name, x):
+        return (self.cutoff - x) ** self._POWERS.get(name, 2.0)
+
+    def _evaluate_piece(self, piece, x):
+        a, b, last, splines = piece
+        out = {}
+        for name, spl in splines.items():
+            v = spl(x)
+            out[name] = v * self._weight(name, x) if last else v
+        return out
+
+    def __call__(self, separation) -> ContactResult:
+        """Contact at ``separation`` (m), like :func:`asperity_contact`."""
+        d = np.asarray(separation, dtype=float)
+        out = {k: np.zeros(d.shape) for k in self._names}
+        below = d < self.d_min
+        if np.any(below):
+            direct = asperity_contact(d[below], self.pad, self.model)
+            for k in self._names:
+                out[k][below] = getattr(direct, k)
+        for piece in self._pieces:
+            a, b = piece[0], piece[1]
+            sel = (d >= a) & (d < b)
+            if np.any(sel):
+                vals = self._evaluate_piece(piece, d[sel])
+                for k in self._names:
+                    out[k][sel] = vals[k]
+        return ContactResult(**out)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from .contact import PadSurface, asperity_contact
+from .contact import ContactTable, PadSurface, asperity_contact
 from .geometry import film_thickness
 from .grid import PolarGrid
 from .reynolds import FaceCoefficients, LubricationParameters, ReynoldsSystem, lubrication_coefficients
@@ -134,6 +134,10 @@ class WaferProblem:
         self.u_scale = np.array([self.sigma, self.sigma / R, self.sigma / R])
         self.factorizations = 0
         self.back_substitutions = 0
+        # contact depends on the separation alone: tabulate it once (error < 1e-8, see ContactTable)
+        self._contact_table = None
+        if variant != "hydrodynamic" and np.isfinite(pad.height_cutoff):
+            self._contact_table = ContactTable(pad, variant)
 
     # ------------------------------------------------------------------ geometry
     def film(self, u, x, y) -> np.ndarray:
@@ -152,7 +156,8 @@ class WaferProblem:
         if self.variant == "hydrodynamic":
             z = np.zeros_like(h)
             return z, z, z, z
-        c = asperity_contact(h - self.separation_offset, self.pad, model=self.variant)
+        d = h - self.separation_offset
+        c = self._contact_table(d) if self._contact_table is not None else asperity_contact(d, self.pad, model=self.variant)
         return c.pressure, c.area_ratio_elastic, c.area_ratio_elastoplastic, c.area_ratio_plastic
 
     # ------------------------------------------------------------------ residuals

@@ -122,9 +122,11 @@ def _outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem, sol: E
     tsx, tsy = slurry_shear_stress(
         st.p_slurry, grad_p, st.h, (dux, duy), lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a, phi_fs, phi_fp
     )
-    tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
-    tau_x = (1.0 - ar) * tsx + tcx
-    tau_y = (1.0 - ar) * tsy + tcy
+    tau_x = (1.0 - ar) * tsx
+    tau_y = (1.0 - ar) * tsy
+    if config.removal_shear == "total":
+        tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
+        tau_x, tau_y = tau_x + tcx, tau_y + tcy
     tau = np.hypot(tau_x, tau_y)
     sigma_n = (1.0 - ar) * st.p_slurry + st.p_contact
     rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)

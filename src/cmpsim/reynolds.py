@@ -188,7 +188,11 @@ def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
     """Sum over the faces of each cell of the outward flux q . n L, m^3/s, shape (size,)."""
     n_t = grid.n_theta
     qx, qy = coeffs.radial[3:5]
-    _, _, lr = grid.radial_faces
+    # integral of the outward normal over the arc r = r_f, |theta - theta_j| < dtheta/2 is
+    # 2 r_f sin(dtheta/2) e_r(theta_j): with it the normals of a cell sum exactly to zero, so
+    # a uniform flux field has exactly zero divergence (free-stream preservation)
+    rf = (np.arange(grid.n_r) + 1.0)[:, None] * grid.dr
+    lr = 2.0 * rf * np.sin(0.5 * grid.dtheta)
     c, s = np.cos(grid.theta), np.sin(grid.theta)
     fr = (qx * c + qy * s) * lr  # outward through the outer face of (i, j)
     qx, qy = coeffs.angular[3:5]
