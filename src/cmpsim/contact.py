@@ -34,12 +34,12 @@ mpmath quadrature to 1e-8 relative.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 from scipy.special import ndtr
 
-__all__ = ["PadSurface", "ContactResult", "ContactTable", "asperity_contact", "asperity_laws", "MODELS"]
+__all__ = ["PadSurface", "ContactResult", "ContactTable", "contact_table", "asperity_contact", "asperity_laws", "MODELS"]
 
 MODELS = ("lep", "elastic")
 
@@ -315,6 +315,12 @@ def asperity_contact(separation, pad: PadSurface, model: str = "lep") -> Contact
         area_ratio_elastoplastic=out(a_r_ep),
         area_ratio_plastic=out(a_r_pl),
     )
+
+
+@lru_cache(maxsize=64)
+def contact_table(pad: PadSurface, model: str = "lep") -> "ContactTable":
+    """The :class:`ContactTable` of a pad, built once and cached (pads are immutable)."""
+    return ContactTable(pad, model)
 
 
 class ContactTable:

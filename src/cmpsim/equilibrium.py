@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
-from .contact import ContactTable, PadSurface, asperity_contact
+from .contact import PadSurface, asperity_contact, contact_table
 from .geometry import film_thickness
 from .grid import PolarGrid
 from .reynolds import FaceCoefficients, LubricationParameters, ReynoldsSystem, lubrication_coefficients
@@ -137,7 +137,7 @@ class WaferProblem:
         # contact depends on the separation alone: tabulate it once (error < 1e-8, see ContactTable)
         self._contact_table = None
         if variant != "hydrodynamic" and np.isfinite(pad.height_cutoff):
-            self._contact_table = ContactTable(pad, variant)
+            self._contact_table = contact_table(pad, variant)
 
     # ------------------------------------------------------------------ geometry
     def film(self, u, x, y) -> np.ndarray:

@@ -1,0 +1,81 @@
+"""The command line: `cmpsim run` on defaults, JSON contract, errors, outputs."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from cmpsim.cli import main
+
+REQUIRED_KEYS = {
+    "film_thickness_center_m", "attack_angle_rad", "contact_area_ratio_elastic", "contact_area_ratio_elastoplastic",
+    "contact_area_ratio_plastic", "fluid_load_fraction", "removal_rate", "load_residual", "converged",
+}
+
+
+def test_run_json_prints_exactly_one_object_with_the_contract_keys():
+    res = CliRunner().invoke(main, ["run", "--json", "--set", "grid=coarse"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert REQUIRED_KEYS <= set(data)
+    assert data["converged"] is True and abs(data["load_residual"]) < 1e-6
+
+
+def test_run_json_equals_python_api():
+    import cmpsim
+
+    res = CliRunner().invoke(main, ["run", "--json", "--set", "applied_pressure=3psi", "--set", "grid=coarse"])
+    api = cmpsim.solve(applied_pressure="3 psi", grid="coarse")
+    assert json.loads(res.stdout) == json.loads(api.to_json())
+
+
+def test_run_table_shows_units():
+    res = CliRunner().invoke(main, ["run", "--set", "grid=coarse"])
+    assert res.exit_code == 0
+    assert "um" in res.output and "nm/min" in res.output and "rad" in res.output
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--set", "applied_pressure=-4psi"], "applied_pressure"),
+        (["--set", "applied_pressure=0psi"], "valid range"),
+        (["--set", "rotation_speed=60m"], "wrong dimension"),
+        (["--set", "bogus=1"], "unknown parameter 'bogus'"),
+        (["--set", "applied_pressure"], "NAME=VALUE"),
+    ],
+)
+def test_bad_input_exits_nonzero_naming_the_parameter_and_writes_nothing(tmp_path, args, message):
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["run", *args, "--out", str(out)])
+    assert res.exit_code == 2
+    assert message in res.stderr
+    assert not out.exists()
+
+
+def test_malformed_toml_exits_nonzero(tmp_path):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[process\napplied_pressure = 1")
+    res = CliRunner().invoke(main, ["run", str(bad)])
+    assert res.exit_code == 2 and "not valid TOML" in res.stderr
+
+
+def test_out_writes_netcdf_with_units_and_png(tmp_path):
+    import xarray as xr
+
+    res = CliRunner().invoke(main, ["run", "--set", "grid=coarse", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    ds = xr.open_dataset(tmp_path / "fields.nc")
+    assert ds["film_thickness"].attrs["units"] == "m" and ds["x"].attrs["units"] == "m"
+    assert ds.attrs["converged"] == 1
+    assert (tmp_path / "maps.png").stat().st_size > 10_000
+    assert json.loads((tmp_path / "result.json").read_text())["converged"] is True
+    ds.close()
+
+
+def test_console_script_runs_on_defaults():
+    proc = subprocess.run([sys.executable, "-m", "cmpsim.cli", "run", "--json"], capture_output=True, text=True, check=False)
+    assert proc.returncode == 0, proc.stderr
+    assert json.loads(proc.stdout)["converged"] is True

@@ -1,0 +1,101 @@
+"""Configuration: units, ranges, TOML round trip, error messages."""
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from cmpsim.config import GRID_PRESETS, PARAMETERS, Config, parameter_table_markdown, parse_value
+
+
+def test_values_take_units_and_are_stored_in_si():
+    c = Config.default().replace(applied_pressure="4psi", rotation_speed="60rpm", particle_diameter="100nm",
+                                 pad_roughness="15um", wafer_diameter="3in", dome_height="5 um")
+    assert c.applied_pressure == pytest.approx(27579.03, rel=1e-6)
+    assert c.rotation_speed == pytest.approx(2 * math.pi)
+    assert c.particle_diameter == pytest.approx(100e-9)
+    assert c.wafer_diameter == pytest.approx(0.0762)
+    assert Config.default().replace(applied_pressure="27.6kPa").applied_pressure == pytest.approx(27600)
+
+
+def test_default_is_the_papers_base_case():
+    c = Config.default()
+    assert c.applied_pressure == pytest.approx(parse_value("applied_pressure", "4 psi"))
+    assert c.rotation_speed == pytest.approx(parse_value("rotation_speed", "60 rpm"))
+    assert c.particle_diameter == pytest.approx(100e-9)
+    assert c.pad_roughness == pytest.approx(15e-6)
+    assert c.dome_height == pytest.approx(5e-6)
+    assert c.wafer_diameter == pytest.approx(0.0762)
+    assert (c.w_over_k, c.t_over_a, c.fluctuation_ratio) == (4e-6, 1.0, 3.0)
+    assert c.model == "lep"
+
+
+@pytest.mark.parametrize(
+    "name,value,match",
+    [
+        ("applied_pressure", "-1 psi", r"applied_pressure .*out of range: valid range \(0, inf\) Pa"),
+        ("applied_pressure", 0.0, r"applied_pressure .*valid range"),
+        ("applied_pressure", "4 m", r"applied_pressure: .*wrong dimension.*Pa"),
+        ("applied_pressure", "4 zorks", r"applied_pressure: cannot read"),
+        ("pad_roughness", "0um", r"pad_roughness .*valid range"),
+        ("pad_poisson", 0.7, r"pad_poisson .*valid range \[0, 0.5\]"),
+        ("model", "viscous", r"model must be one of 'lep', 'elastic', 'hydrodynamic'"),
+        ("grid", "7x9", r"grid must be"),
+        ("no_such_thing", 1.0, r"unknown parameter 'no_such_thing'"),
+        ("particle_diameter", float("nan"), r"particle_diameter must be a finite number"),
+    ],
+)
+def test_bad_values_raise_valueerror_naming_parameter_and_range(name, value, match):
+    with pytest.raises(ValueError, match=match):
+        Config.default().replace(**{name: value})
+
+
+def test_toml_round_trip_is_exact(tmp_path):
+    c = Config.default().replace(applied_pressure="3.3 psi", particle_diameter="137nm", model="elastic", grid="10x24",
+                                 kinematics="sliding")
+    c.to_toml(tmp_path / "c.toml")
+    assert Config.from_toml(tmp_path / "c.toml") == c
+
+
+def test_toml_accepts_flat_keys_with_units(tmp_path):
+    (tmp_path / "c.toml").write_text('applied_pressure = "2 psi"\n[slurry]\nparticle_diameter = "200 nm"\n')
+    c = Config.from_toml(tmp_path / "c.toml")
+    assert c.applied_pressure == pytest.approx(2 * 6894.757293168361)
+    assert c.particle_diameter == pytest.approx(200e-9)
+
+
+@pytest.mark.parametrize(
+    "text,match",
+    [("x = [", "not valid TOML"), ("[pad]\napplied_pressure = 3.0\n", "belongs in \\[process\\]"), ("[pad]\nfoo = 1\n", "unknown parameter 'foo'")],
+)
+def test_malformed_toml_is_rejected_with_the_reason(tmp_path, text, match):
+    (tmp_path / "c.toml").write_text(text)
+    with pytest.raises(ValueError, match=match):
+        Config.from_toml(tmp_path / "c.toml")
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(min_value=1e-3, max_value=1e3))
+def test_any_positive_pressure_in_kpa_round_trips_through_the_si_value(kpa):
+    c = Config.default().replace(applied_pressure=f"{kpa!r} kPa")
+    assert c.applied_pressure == pytest.approx(kpa * 1e3, rel=1e-12)
+
+
+def test_every_parameter_has_a_source_and_a_valid_default():
+    for name, p in PARAMETERS.items():
+        assert p.source, name
+        assert parse_value(name, p.default) == p.default
+
+
+def test_grid_presets_are_valid_polar_grids():
+    for nr, nt in GRID_PRESETS.values():
+        assert nr >= 3 and nt >= 8 and nt % 2 == 0
+    assert Config.default().replace(grid="fine").grid_shape == GRID_PRESETS["fine"]
+
+
+def test_parameter_table_in_model_document_is_generated_from_the_registry():
+    from pathlib import Path
+
+    doc = (Path(__file__).parents[1] / "docs" / "model.md").read_text()
+    assert parameter_table_markdown() in doc, "regenerate the table with `cmpsim params --markdown`"
