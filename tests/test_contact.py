@@ -4,7 +4,9 @@ The reference :func:`contact_reference_mp` re-implements the per-asperity laws (
 Zhao-Maietta-Chang, Abbott-Firestone) in mpmath, independently of the kernel, and
 integrates them over the truncated, renormalised Gaussian summit-height density with
 adaptive mpmath quadrature (tanh-sinh), broken at D, D + omega_e, D + omega_p and the
-cutoff.
+cutoff, and further where the Gaussian weight changes by large factors
+(:func:`gaussian_breakpoints`), with the integrand scaled to O(1) because mp.quad's
+tolerance is absolute.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from cmpsim.contact import PadSurface, asperity_contact, asperity_laws
+from cmpsim.contact import ContactTable, PadSurface, asperity_contact, asperity_laws
 
 #: The feasibility prototype's pad: omega_e = 0.20 sigma, omega_p = 11 sigma.
 PAD_SOFT = PadSurface(15e-6, 1e8, 50e-6, 110e6, 20e6, 0.3)
@@ -176,6 +178,44 @@ def test_pressure_and_area_ratios_match_adaptive_mpmath_quadrature_to_1e_8_from_
         assert nonzero["area_ratio_elastoplastic"] == nonzero["area_ratio_plastic"] == 0
 
 
+def test_mpmath_reference_reproduces_the_closed_form_plastic_area_in_the_far_gaussian_tail():
+    # guards the reference itself: plain tanh-sinh over [14, inf) is off by 4e-5 here
+    pad, dl = PAD_SOFT_INF, 3.0 - 1e-6
+    ref = contact_reference_mp(dl * pad.sigma_s, pad, "lep")["area_ratio_plastic"]
+    with mp.workdps(30):
+        delta = mp.mpf(dl * pad.sigma_s) / mp.mpf(pad.sigma_s)
+        a = delta + _mp_pad(pad)["w_p"] / mp.mpf(pad.sigma_s)
+        first_moment = mp.npdf(a) - delta * mp.ncdf(-a)  # int_a^inf (zeta - delta) phi
+        exact = 2 * mp.pi * mp.mpf(pad.asperity_radius) * mp.mpf(pad.sigma_s) * pad.asperity_density * first_moment
+    assert _rel(float(ref), exact) < 1e-14
+
+
+@pytest.mark.parametrize("dl", [-2.0, 0.0, 3.0, 5.0, 8.0])
+def test_plastic_area_in_the_upper_gaussian_tail_matches_the_closed_form_to_1e_12(dl):
+    # int_a^inf (zeta - delta) phi = phi(a) - delta Q(a): computed as 1 - Phi(a) from the
+    # lower tail it lost every digit once a = delta + omega_p / sigma exceeded ~8
+    pad = PAD_SOFT_INF
+    got = float(asperity_contact(dl * pad.sigma_s, pad, "lep").area_ratio_plastic)
+    with mp.workdps(30):
+        delta = mp.mpf(dl * pad.sigma_s) / mp.mpf(pad.sigma_s)
+        a = delta + _mp_pad(pad)["w_p"] / mp.mpf(pad.sigma_s)
+        first_moment = mp.npdf(a) - delta * mp.ncdf(-a)
+        exact = 2 * mp.pi * mp.mpf(pad.asperity_radius) * mp.mpf(pad.sigma_s) * pad.asperity_density * first_moment
+    assert _rel(got, exact) < 1e-12
+
+
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("pad_name", list(PADS))
+def test_extreme_separations_give_finite_non_negative_results_ordered_like_the_separation(pad_name, model):
+    pad = PADS[pad_name]
+    d = np.array([-1e3, -40.0, -12.0, 0.0, 10.0, 40.0, 1e3]) * pad.sigma_s
+    res = asperity_contact(d, pad, model)
+    for q in QUANTITIES:
+        v = getattr(res, q)
+        assert np.all(np.isfinite(v) & (v >= 0)), q
+    assert np.all(np.diff(res.pressure) <= 0) and res.pressure[0] > 1e3 * res.pressure[3]
+
+
 # --- per-asperity laws ---------------------------------------------------------------------
 @pytest.mark.parametrize("pad_name", ["soft", "stiff", "other_inf"])
 def test_per_asperity_area_and_load_are_continuous_at_omega_e_and_omega_p(pad_name):
@@ -285,6 +325,26 @@ def test_output_shapes_follow_the_separation_shape_scalar_1d_2d(model):
         assert float(a0) == a2[1, 2]
     area, load, regime = asperity_laws(np.ones((2, 5)) * pad.omega_e, pad, model)
     assert area.shape == load.shape == regime.shape == (2, 5)
+
+
+# --- the solver's tabulation -----------------------------------------------------------------
+@pytest.mark.parametrize("model", MODELS)
+@pytest.mark.parametrize("pad_name", ["soft", "stiff"])
+def test_contact_table_matches_the_kernel_to_1e_8_of_the_values_at_zero_separation(pad_name, model):
+    pad = PADS[pad_name]
+    table = ContactTable(pad, model)
+    assert table.error_bound < 1e-8
+    rng = np.random.default_rng(11)
+    d = np.concatenate([rng.uniform(-8.0, 3.0, 4000), [-6.0, 3.0 - 1e-9, 3.0, 3.5]]) * pad.sigma_s
+    got, ref = table(d), asperity_contact(d, pad, model)
+    at0 = asperity_contact(0.0, pad, model)
+    for q in QUANTITIES + ("pressure_elastic", "pressure_elastoplastic", "pressure_plastic"):
+        scale = float(at0.pressure) if q.startswith("pressure") else float(at0.area_ratio)
+        assert np.max(np.abs(getattr(got, q) - getattr(ref, q))) <= 1e-8 * scale, q
+    assert np.all(got.pressure[d >= pad.height_cutoff * pad.sigma_s] == 0.0)
+    assert table(d.reshape(4, -1)).pressure.shape == (4, d.size // 4)
+    with pytest.raises(ValueError, match="height_cutoff"):
+        ContactTable(PAD_SOFT_INF, model)
 
 
 # --- argument checking -----------------------------------------------------------------------
