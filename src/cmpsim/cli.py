@@ -139,5 +139,226 @@ def params(markdown):
     Console().print(_rich_table("cmpsim inputs (set with --set NAME=VALUE)", ["name", "default", "unit", "valid range (SI)", "source"], rows))
 
 
+# ---- sweep command (sweeps.py) ----
+@main.command(name="sweep")
+@click.argument("sweep_file", type=click.Path(dir_okay=False))
+@click.option("--out", "out_path", type=click.Path(), help="Result file: NetCDF (default SWEEP_FILE stem + .nc in the current directory), or zarr for a .zarr path.")
+@click.option("--workers", type=click.IntRange(min=0), default=None, help="Worker processes of the local Dask cluster (default: the machine's cores); 0 runs in this process without Dask.")
+@click.option("--scheduler", metavar="ADDRESS", help="Run on an existing Dask cluster, e.g. tcp://host:8786 (its workers need cmpsim installed).")
+@click.option("--resume", is_flag=True, help="Continue an interrupted sweep: reuse the points saved next to --out, compute only the missing ones.")
+@click.option("--max-points", type=click.IntRange(min=1), default=None, help="Refuse sweeps with more points than this (default 10000).")
+@click.option("--no-warm-start", is_flag=True, help="Start every point from the cold start instead of from its converged neighbours.")
+@click.option("--no-progress", is_flag=True, help="No progress bar.")
+def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, no_warm_start, no_progress):
+    """Run a parameter sweep (outer product of [axes] plus [[points]]) on dask.distributed.
+
+    SWEEP_FILE is a TOML file with an optional [base] table of `cmpsim run` settings and an
+    [axes] table (setting = list of values or {start, stop, num}); see docs/sweeps.md and
+    the example shipped as cmpsim/data/example_sweep.toml. The result is one xarray Dataset
+    (one dimension per axis, every `cmpsim run --json` scalar as a variable, status and
+    error per point). Every finished point is saved in OUT.parts/ as it completes, so an
+    interrupted sweep continues with --resume.
+    """
+    import time as _time
+
+    from .sweeps import DEFAULT_MAX_POINTS, SweepError, SweepSpec, summary_lines
+    from .sweeps import sweep as run_sweep
+
+    try:
+        spec = SweepSpec.from_toml(sweep_file)
+        spec.check_size(max_points or DEFAULT_MAX_POINTS)
+    except ValueError as exc:
+        _fail(str(exc))
+    out = Path(out_path) if out_path else Path.cwd() / (Path(sweep_file).stem + ".nc")
+    where = f"Dask cluster at {scheduler}" if scheduler else ("this process (no Dask)" if workers == 0 else "a local Dask cluster")
+    click.echo(f"sweep: {spec.n_points} points ({' x '.join(f'{d} {n}' for d, n in zip(spec.dims, spec.shape))}) on {where} -> {out}")
+    t0 = _time.perf_counter()
+    try:
+        ds = run_sweep(
+            spec,
+            out=out,
+            workers=workers,
+            scheduler=scheduler,
+            resume=resume,
+            progress=not no_progress,
+            warm_start=not no_warm_start,
+            max_points=max_points or DEFAULT_MAX_POINTS,
+            log=click.echo,
+        )
+    except SweepError as exc:
+        _fail(str(exc))
+    except KeyboardInterrupt:
+        sys.exit(130)
+    elapsed = _time.perf_counter() - t0
+    for line in summary_lines(ds):
+        click.echo(line)
+    click.echo(f"wrote {out} in {elapsed:.1f} s")
+
+
+# ---- end sweep command ----
+
+
+# ---- reproduce/validate/calibrate commands ----
+class _GreedyOption(click.Option):
+    """An option that takes every following value up to the next option: ``--free A B C``.
+
+    Values may also be repeated (``--free A --free B``) or comma-separated. A value that looks
+    like a file (contains '.' or '/') ends the list, so ``--free A data.csv`` still works.
+    """
+
+    def add_to_parser(self, parser, ctx):
+        ret = super().add_to_parser(parser, ctx)
+        opt = None
+        for name in self.opts:
+            opt = getattr(parser, "_long_opt", {}).get(name) or getattr(parser, "_short_opt", {}).get(name)
+            if opt is not None:
+                break
+        if opt is None:  # pragma: no cover - parser internals changed: plain (repeatable) option
+            return ret
+        previous = opt.process
+
+        def process(value, state):
+            values = [value]
+            while state.rargs and not state.rargs[0].startswith("-") and "." not in state.rargs[0] and "/" not in state.rargs[0]:
+                values.append(state.rargs.pop(0))
+            for v in values:
+                previous(v, state)
+
+        opt.process = process
+        return ret
+
+
+def _split_names(values) -> list[str]:
+    out = []
+    for v in values:
+        out += [s.strip() for s in str(v).split(",") if s.strip()]
+    return out
+
+
+def _base_config(config_path, assignments, grid):
+    cfg = load_config(config_path, assignments)
+    return cfg.replace(grid=grid) if grid else cfg
+
+
+@main.command(name="reproduce", short_help="Regenerate the paper's Figs. 3-12, their CSVs and a trend-table report.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="reproduction", show_default=True, help="Directory for the ten PNG + CSV figures, trends.csv, REPORT.md and REPORT.html.")
+@click.option("--grid", type=click.Choice(["coarse", "default", "fine"]), default="default", show_default=True, help="Grid of every solve.")
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the figures do not vary (e.g. from `cmpsim calibrate`).")
+def reproduce_command(out_dir, grid, config_path):
+    """Regenerate the paper's Figs. 3-12, their CSVs and a report with the trend table.
+
+    Solves every equilibrium behind the figures (load 2-6 psi, speed 30-90 rpm; the paper's
+    curves), writes figNN_*.png and figNN_*.csv, and checks each qualitative statement the
+    paper makes about them against the data of the run (REPORT.md / REPORT.html, trends.csv).
+    """
+    from .reproduce import reproduce
+
+    try:
+        cfg = load_config(config_path, ())
+    except ValueError as exc:
+        _fail(str(exc))
+    command = "cmpsim reproduce" + (f" --out {out_dir}" if out_dir != "reproduction" else "") + (f" --grid {grid}" if grid != "default" else "") + (f" --config {config_path}" if config_path else "")
+    try:
+        rep = reproduce(out=out_dir, grid=grid, progress=True, config=cfg, command=command)
+    except (ValueError, OSError) as exc:
+        _fail(str(exc))
+    from rich.console import Console
+
+    console = Console()
+    rows = [[s.id, s.figure, s.text, "[green]yes[/green]" if s.reproduced else "[red]no[/red]"] for s in rep.statements]
+    console.print(_rich_table(f"Statements of the paper reproduced: {rep.n_reproduced} of {len(rep.statements)}", ["#", "Fig.", "statement", "reproduced"], rows))
+    console.print(
+        f"{rep.equilibria} equilibria ({rep.factorizations} factorisations) in {rep.solve_s:.1f} s; total {rep.elapsed_s:.1f} s. "
+        f"Wrote {len(rep.figures)} figures (PNG + CSV), {rep.report_md} and {rep.report_html}.",
+        highlight=False,
+    )
+    if rep.failures:
+        console.print(f"[yellow]{len(rep.failures)} operating point(s) without equilibrium: see the report[/yellow]")
+
+
+@main.command(name="validate")
+@click.argument("data", nargs=-1, type=click.Path(dir_okay=False))
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the data do not set (e.g. from `cmpsim calibrate`).")
+@click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units (repeatable).")
+@click.option("--grid", default=None, help="Grid preset (coarse, default, fine) or NRxNT; default: the configuration's.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), default="validation", show_default=True, help="Directory for parity.png, points.csv and datasets.csv.")
+@click.option("--markdown", is_flag=True, help="Print the tables as Markdown instead of rich tables.")
+def validate_command(data, config_path, assignments, grid, out_dir, markdown):
+    """Compare the model with measured data; with no DATA, every data set shipped with cmpsim.
+
+    DATA are CSV files in the format of cmpsim/data/README.md (operating conditions with
+    units, the measured quantity, its uncertainty and source). For each point the model is
+    solved and compared; the tables give model vs measurement, error, RMS error and, for
+    shape comparisons, the leave-one-out error beside that of predicting the mean.
+    """
+    from .validation import validate
+
+    try:
+        cfg = _base_config(config_path, assignments, grid)
+        report = validate(list(data) or None, config=cfg, progress=not markdown)
+    except ValueError as exc:
+        _fail(str(exc))
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        report.to_csv(out / "points.csv")
+        report.summary_csv(out / "datasets.csv")
+        report.parity_plot(out / "parity.png")
+    except OSError as exc:
+        _fail(f"cannot write to {out}: {exc}")
+    if markdown:
+        click.echo(report.to_markdown(), nl=False)
+        return
+    from rich.console import Console
+
+    console = Console()
+    console.print(_rich_table("Model vs data, per point (shape data sets: model times the fitted scale)", report.POINT_HEADER, report.point_rows()))
+    console.print(_rich_table("Per data set", report.DATASET_HEADER, report.dataset_rows()))
+    console.print(
+        f"{report.equilibria} equilibria in {report.elapsed_s:.1f} s (grid {cfg.numerics.grid}); wrote {out}/points.csv, datasets.csv, parity.png",
+        highlight=False,
+    )
+
+
+@main.command(name="calibrate")
+@click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
+@click.option("--free", "free", cls=_GreedyOption, multiple=True, required=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius.")
+@click.option("--bounds", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Bounds with units, e.g. --bounds pad_modulus=20MPa:500MPa (repeatable; default a factor 10 either side).")
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="Starting configuration (TOML).")
+@click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units (repeatable).")
+@click.option("--grid", default=None, help="Grid preset or NRxNT; default: the configuration's.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="Fitted configuration, accepted by `cmpsim run`, `validate --config` and `reproduce --config`.")
+@click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser.")
+@click.option("--quiet", is_flag=True, help="Do not print the evaluations while fitting.")
+def calibrate_command(data, free, bounds, config_path, assignments, grid, out_path, max_evaluations, quiet):
+    """Fit uncertain inputs to measurements (scipy least_squares, bounded).
+
+    Reports fitted values with standard errors and 95 % intervals, their correlations and
+    the residuals before and after, and writes the fitted configuration to --out.
+    """
+    from .calibration import calibrate
+
+    names = _split_names(free)
+    bnds = {}
+    try:
+        for item in bounds:
+            if "=" not in item or ":" not in item.split("=", 1)[1]:
+                raise ValueError(f"--bounds expects NAME=LOW:HIGH (e.g. pad_modulus=20MPa:500MPa); got {item!r}")
+            name, rng = item.split("=", 1)
+            lo, hi = rng.split(":", 1)
+            bnds[name.strip().replace("-", "_")] = (lo.strip(), hi.strip())
+        cfg = _base_config(config_path, assignments, grid)
+        result = calibrate(list(data), names, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
+    except ValueError as exc:
+        _fail(str(exc))
+    try:
+        result.to_toml(out_path)
+    except OSError as exc:
+        _fail(f"cannot write {out_path}: {exc}")
+    click.echo(result.summary())
+    click.echo(f"wrote {out_path}")
+# ---- end reproduce/validate/calibrate commands ----
+
+
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -81,6 +81,21 @@ def _contact_total(result) -> float:
     return s["contact_area_ratio_elastic"] + s["contact_area_ratio_elastoplastic"] + s["contact_area_ratio_plastic"]
 
 
+def _friction(result) -> float:
+    """Friction coefficient: mean shear stress on the wafer over the applied pressure.
+
+    With ``removal_shear = "total"`` the model's mean shear stress already holds the slurry
+    shear and the summit friction; with ``"slurry"`` the summit friction mu * p_c is added
+    (magnitudes added: both act along the sliding direction to first order).
+    """
+    s = result.scalars
+    p = result.config.applied_pressure
+    mu = s["mean_shear_stress_pa"] / p
+    if getattr(result.config, "removal_shear", "total") != "total":
+        mu += result.config.friction_coefficient * s["contact_load_fraction"]
+    return float(mu)
+
+
 #: Measurable quantity -> (SI unit for pint, display unit for tables/plots, description, model extractor).
 QUANTITIES: dict[str, tuple[str, str, str, Callable[[Any], float]]] = {
     "film_thickness": ("m", "um", "slurry film thickness at the wafer centre", lambda r: r.scalars["film_thickness_center_m"]),
@@ -91,7 +106,7 @@ QUANTITIES: dict[str, tuple[str, str, str, Callable[[Any], float]]] = {
     "contact_area_ratio": ("dimensionless", "%", "real contact area / wafer area (elastic + elastoplastic + plastic)", _contact_total),
     "contact_area_ratio_elastic": ("dimensionless", "%", "elastic real contact area / wafer area", lambda r: r.scalars["contact_area_ratio_elastic"]),
     "contact_area_ratio_elastoplastic": ("dimensionless", "%", "elastoplastic real contact area / wafer area", lambda r: r.scalars["contact_area_ratio_elastoplastic"]),
-    "friction_coefficient": ("dimensionless", "-", "wafer-mean shear stress / applied pressure", lambda r: r.scalars["mean_shear_stress_pa"] / r.config.applied_pressure),
+    "friction_coefficient": ("dimensionless", "-", "wafer-mean shear stress (slurry + summit friction) / applied pressure", lambda r: _friction(r)),
     "removal_rate": ("m/s", "nm/min", "wafer-mean removal rate K sigma_n tau", lambda r: r.scalars["removal_rate"]),
 }
 
@@ -790,12 +805,19 @@ def evaluate_dataset(ds: Dataset, values_si: Sequence[float], results: Sequence[
 
 
 def run_dataset(ds: Dataset, config: Config, relative: bool = False, advance: Callable[[], None] | None = None):
-    """Solve every point of a data set (warm start from the previous point). Returns (values, results, statuses)."""
+    """Solve every point of a data set (warm start from the previous point). Returns (values, results, statuses).
+
+    Points at identical conditions share one equilibrium.
+    """
     values, results, statuses = [], [], []
     start = None
+    same: dict[tuple, tuple] = {}  # points at identical conditions share one equilibrium
     for p in ds.points:
-        cfg = point_config(config, p.conditions)
-        res, msg = solve_point(cfg, start=start, relative=relative)
+        key = tuple(sorted(p.conditions.items()))
+        if key not in same:
+            cfg = point_config(config, p.conditions)
+            same[key] = solve_point(cfg, start=start, relative=relative)
+        res, msg = same[key]
         if res is None:
             values.append(float("nan"))
             results.append(None)
@@ -847,7 +869,8 @@ def validate(paths=None, config: Config | None = None, grid: str | None = None, 
             rows, summary = evaluate_dataset(ds, values, results, statuses)
             points.extend(rows)
             summaries.append(summary)
-    return ValidationReport(points, summaries, config, equilibria=total, elapsed_s=time.perf_counter() - t0)
+    n_eq = sum(len({tuple(sorted(p.conditions.items())) for p in ds.points}) for ds in datasets)
+    return ValidationReport(points, summaries, config, equilibria=n_eq, elapsed_s=time.perf_counter() - t0)
 
 
 class _progress:
