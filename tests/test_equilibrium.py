@@ -152,3 +152,18 @@ def test_removal_rate_with_particle_size_is_documented_as_not_reproduced(trends)
     slurry_small = cmpsim.solve(removal_shear="slurry")
     slurry_large = cmpsim.solve(removal_shear="slurry", particle_diameter="200nm")
     assert slurry_large.removal_rate > slurry_small.removal_rate
+
+
+def test_root_scan_finds_the_unique_lep_equilibrium(base):
+    from cmpsim.equilibrium import scan_moment_roots
+
+    scan = scan_moment_roots(base.problem, base.solution)
+    assert len(scan.roots) == 1
+    assert scan.roots[0] == pytest.approx(base.attack_angle_rad, rel=0.3)
+
+
+def test_root_scan_reports_multiple_hydrodynamic_equilibria():
+    """Without contact at sigma = 10 um the moment has several roots (as the prototype found)."""
+    r = cmpsim.solve(model="hydrodynamic", pad_roughness="10um", relative=False, check_roots=True)
+    assert r.moment_roots_found >= 2
+    assert r.flow_factor_floored_fraction > 0.5  # and they all live outside eq. 8's validity

@@ -30,7 +30,7 @@ from .geometry import film_thickness
 from .grid import PolarGrid
 from .reynolds import FaceCoefficients, LubricationParameters, ReynoldsSystem, lubrication_coefficients
 
-__all__ = ["WaferProblem", "PressureState", "EquilibriumSolution", "EquilibriumError", "solve_equilibrium", "MODEL_VARIANTS"]
+__all__ = ["WaferProblem", "PressureState", "EquilibriumSolution", "EquilibriumError", "solve_equilibrium", "balance_load", "scan_moment_roots", "RootScan", "MODEL_VARIANTS"]
 
 MODEL_VARIANTS = ("lep", "elastic", "hydrodynamic")
 
@@ -389,3 +389,42 @@ def solve_equilibrium(
         u, st = trial, new
         history.append((u.copy(), st.residual.copy()))
     return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+
+
+@dataclass
+class RootScan:
+    """Moment residual along a scan of attack angles, the load balanced at each (h0 by Brent).
+
+    ``roots`` are the attack angles (rad) where the moment about y changes sign, found by
+    linear interpolation between scan points; more than one means the equilibrium is not
+    unique along this line (cross tilt held at its equilibrium value).
+    """
+
+    attack_angles: np.ndarray
+    moment_residuals: np.ndarray
+    roots: list
+
+
+def scan_moment_roots(problem: WaferProblem, solution: EquilibriumSolution, n: int = 13, span: float = 0.9) -> RootScan:
+    """Look for other equilibria: scan the attack angle over +-``span`` x (h_min / R_w).
+
+    Tilting a wafer by h_min / R_w would make its edge touch the pad mean plane, so the scan
+    covers the admissible tilts. Each scan point costs one load balance (about ten pressure
+    solves). Points where the load cannot be balanced are left out (NaN).
+    """
+    st = solution.state
+    limit = span * float(st.h.min()) / problem.grid.radius
+    thetas = np.linspace(-limit, limit, n)
+    moments = np.full(n, np.nan)
+    for k, th in enumerate(thetas):
+        try:
+            u = balance_load(problem, [st.u[0], th, st.u[2]])
+            moments[k] = problem.state(u).residual[1]
+        except (EquilibriumError, ValueError):
+            continue
+    roots = []
+    for k in range(n - 1):
+        a, b = moments[k], moments[k + 1]
+        if np.isfinite(a) and np.isfinite(b) and (a == 0 or a * b < 0):
+            roots.append(float(thetas[k] - a * (thetas[k + 1] - thetas[k]) / (b - a)))
+    return RootScan(thetas, moments, roots)

@@ -13,7 +13,7 @@ import numpy as np
 
 from .config import Config
 from .contact import PadSurface
-from .equilibrium import EquilibriumError, EquilibriumSolution, WaferProblem, solve_equilibrium
+from .equilibrium import EquilibriumError, EquilibriumSolution, WaferProblem, scan_moment_roots, solve_equilibrium
 from .flowfactors import RoughnessGeometry, shear_stress_factors
 from .grainflow import grain_coefficients, granular_pressure
 from .grid import PolarGrid
@@ -192,7 +192,7 @@ def _reference_removal_rate(config: Config) -> float:
     return _REFERENCE_CACHE[key]
 
 
-def solve(config: Config | None = None, start=None, relative: bool = True, **overrides):
+def solve(config: Config | None = None, start=None, relative: bool = True, check_roots: bool = False, **overrides):
     """Solve one operating point and evaluate every output.
 
     Parameters
@@ -204,6 +204,9 @@ def solve(config: Config | None = None, start=None, relative: bool = True, **ove
     relative : bool
         Also solve the reference case (LEP model, d = 100 nm, sigma = 15 um, 4 psi, 60 rpm,
         other inputs equal) for ``removal_rate_relative`` (cached).
+    check_roots : bool
+        Also scan the attack angle for other moment roots (about 13 load balances); adds
+        the scalar ``moment_roots_found`` and ``result.root_scan``.
     **overrides
         Inputs to change, by name (``applied_pressure="3 psi"``).
 
@@ -227,4 +230,10 @@ def solve(config: Config | None = None, start=None, relative: bool = True, **ove
     scalars, polar = _outputs(config, setup, problem, sol)
     if relative:
         scalars["removal_rate_relative"] = scalars["removal_rate"] / _reference_removal_rate(config)
-    return Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol)
+    scan = None
+    if check_roots:
+        scan = scan_moment_roots(problem, sol)
+        scalars["moment_roots_found"] = len(scan.roots)
+    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol)
+    result.root_scan = scan
+    return result

@@ -39,6 +39,7 @@ SCALARS: dict[str, tuple[str, float, str, str]] = {
     "iterations": ("1", 1.0, "-", "Newton iterations"),
     "factorizations": ("1", 1.0, "-", "Sparse LU factorisations (pressure solves)"),
     "converged": ("1", 1.0, "-", "Equilibrium converged"),
+    "moment_roots_found": ("1", 1.0, "-", "Moment roots found by the attack-angle scan (--check-roots)"),
 }
 
 #: Field name -> (SI unit, description).
@@ -94,6 +95,7 @@ class Result:
         self.problem = problem
         self.solution = solution
         self._fields = None
+        self.root_scan = None
 
     def __getattr__(self, name: str):
         scalars = self.__dict__.get("scalars", {})
