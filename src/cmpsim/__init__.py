@@ -28,7 +28,7 @@ _LAZY = {
     "solve": ("cmpsim.model", "solve"),
     "EquilibriumError": ("cmpsim.equilibrium", "EquilibriumError"),
     "sweep": ("cmpsim.sweeps", "sweep"),
-    "reproduce": ("cmpsim.reproduce", "reproduce"),
+    "reproduce": ("cmpsim.reproduction", "reproduce"),
     "validate": ("cmpsim.validation", "validate"),
     "calibrate": ("cmpsim.calibration", "calibrate"),
 }

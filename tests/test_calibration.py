@@ -1,0 +1,111 @@
+"""`cmpsim calibrate`: recovers known parameters from the model's own synthetic data."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from cmpsim.calibration import CalibrationError, calibrate, synthetic_dataset
+from cmpsim.cli import main
+from cmpsim.config import Config
+
+BASE = Config.default().replace(grid="coarse")
+POINTS = [{"applied_pressure": f"{p} psi", "rotation_speed": f"{w} rpm"} for p in (2, 4, 6) for w in (30, 90)]
+TRUTH = {"asperity_density": 3.0e8, "pad_modulus": 150e6}
+
+
+@pytest.fixture(scope="module")
+def synthetic(tmp_path_factory):
+    path = tmp_path_factory.mktemp("cal") / "synthetic.csv"
+    synthetic_dataset(path, TRUTH, POINTS, ["film_thickness", "contact_area_ratio", "fluid_load_fraction"], config=BASE, relative_noise=0.01, seed=1)
+    return path
+
+
+@pytest.fixture(scope="module")
+def fit(synthetic):
+    return calibrate(synthetic, ["asperity_density", "pad_modulus"], config=BASE)
+
+
+def test_recovers_known_parameters_within_the_reported_uncertainty(fit):
+    for name, truth in TRUTH.items():
+        v, se = fit.values[name], fit.stderr[name]
+        assert v != pytest.approx(BASE.to_dict()[name], rel=0.05)  # it moved from the start
+        assert abs(v - truth) <= 3.0 * se, (name, v, truth, se)
+        lo, hi = fit.ci95[name]
+        assert lo < truth < hi
+        assert se / v < 0.1
+    assert fit.success and fit.absolute_sigma and fit.dof == 18 - 2
+
+
+def test_reports_correlations_and_residuals_before_and_after(fit):
+    c = fit.correlation
+    assert c.shape == (2, 2) and np.allclose(np.diag(c), 1.0) and abs(c[0, 1]) <= 1.0
+    assert fit.residuals_before.shape == fit.residuals_after.shape == (18,)
+    assert fit.rms_after < 0.2 * fit.rms_before
+    assert 0.05 < fit.reduced_chi2 < 3.0  # noise of 1 % with 1 % uncertainty
+    text = fit.summary()
+    assert "asperity_density" in text and "correlation matrix" in text and "resid. after" in text
+
+
+def test_fitted_config_is_written_and_read_back(fit, tmp_path):
+    path = fit.to_toml(tmp_path / "fitted.toml")
+    cfg = Config.from_toml(path)
+    assert cfg.asperity_density == pytest.approx(fit.values["asperity_density"], rel=1e-12)
+    assert cfg.pad_modulus == pytest.approx(fit.values["pad_modulus"], rel=1e-12)
+    res = CliRunner().invoke(main, ["run", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+
+
+def test_cli_calibrate_one_parameter(synthetic, tmp_path):
+    out = tmp_path / "cal.toml"
+    res = CliRunner().invoke(
+        main,
+        ["calibrate", str(synthetic), "--free", "asperity_density", "--set", "pad_modulus=150MPa", "--grid", "coarse", "--out", str(out), "--quiet"],
+    )
+    assert res.exit_code == 0, res.output
+    assert "asperity_density" in res.output and "chi-square" in res.output
+    cfg = Config.from_toml(out)
+    assert cfg.asperity_density == pytest.approx(3e8, rel=0.05)
+    res = CliRunner().invoke(main, ["validate", str(synthetic), "--config", str(out), "--out", str(tmp_path / "v"), "--markdown"])
+    assert res.exit_code == 0, res.output
+
+
+def test_free_takes_several_names_after_one_flag(synthetic, tmp_path, monkeypatch):
+    seen = {}
+
+    def fake(data, free, **kw):
+        seen["free"] = free
+        raise CalibrationError("stop here")
+
+    monkeypatch.setattr("cmpsim.calibration.calibrate", fake)
+    res = CliRunner().invoke(main, ["calibrate", str(synthetic), "--free", "asperity_density", "asperity_radius", "pad_modulus"])
+    assert seen["free"] == ["asperity_density", "asperity_radius", "pad_modulus"]
+    assert res.exit_code == 2
+    res = CliRunner().invoke(main, ["calibrate", "--free", "asperity_density", str(synthetic)])
+    assert seen["free"] == ["asperity_density"]
+
+
+@pytest.mark.parametrize(
+    "args, needle",
+    [
+        (["--free", "asperity_densty"], "unknown parameter 'asperity_densty'"),
+        (["--free", "model"], "cannot be fitted"),
+        (["--free", "applied_pressure"], "set per point"),
+        (["--free", "pad_modulus", "--bounds", "pad_modulus=5"], "NAME=LOW:HIGH"),
+        (["--free", "pad_modulus", "--bounds", "pad_modulus=500MPa:20MPa"], "must be below"),
+        (["--free", "pad_modulus", "--bounds", "pad_modulus=1m:2m"], "wrong dimension"),
+        (["--free", "pad_modulus", "--bounds", "asperity_radius=1um:2um"], "not free"),
+        (["--free", "pad_modulus", "pad_modulus"], "repeated"),
+    ],
+)
+def test_bad_requests_name_the_problem(synthetic, args, needle):
+    res = CliRunner().invoke(main, ["calibrate", str(synthetic), "--grid", "coarse", *args])
+    assert res.exit_code == 2
+    assert needle in res.output
+
+
+def test_refuses_to_calibrate_against_another_models_prediction():
+    from cmpsim.validation import shipped_dataset_paths
+
+    thakurta = [p for p in shipped_dataset_paths() if "thakurta" in p.name]
+    with pytest.raises(CalibrationError, match="another model's predictions"):
+        calibrate(thakurta, ["pad_modulus"], config=BASE)
