@@ -140,7 +140,7 @@ def test_removal_rate_rises_with_load_and_speed_and_load_matters_more(trends):
     assert rr_p[-1] / rr_p[0] > rr_w[-1] / rr_w[0]
 
 
-def test_removal_rate_falls_with_pad_roughness(trends):
+def test_removal_rate_falls_with_pad_roughness_at_the_base_point(trends):
     assert trends["ds", "100nm", "20um"].removal_rate < trends["ds", "100nm", "15um"].removal_rate
 
 

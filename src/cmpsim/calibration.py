@@ -480,7 +480,7 @@ def calibrate(
         elif not log[n] and stderr[n] > abs(v):
             notes.append(f"{n} is not determined by these data: its standard error exceeds its value")
         lo, hi = bnds[n]
-        if np.isclose(v, lo, rtol=1e-4) or np.isclose(v, hi, rtol=1e-4):
+        if np.isclose(v, lo, rtol=1e-4, atol=0.0) or np.isclose(v, hi, rtol=1e-4, atol=0.0):
             notes.append(f"{n} ended on a bound ({format_display(n, v)} {PARAMETERS[n].display}): the interval is not meaningful; widen --bounds")
     failed = int((~np.isfinite(m1)).sum())
     if failed:

@@ -65,10 +65,11 @@ def main():
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units: --set applied_pressure=3psi (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, result.json and config.toml to DIR.")
-def run(config, assignments, as_json, out_dir):
+@click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
+def run(config, assignments, as_json, out_dir, check_roots):
     """Solve one operating point (the paper's base case by default).
 
-    CONFIG is an optional TOML file (sections [wafer] [process] [slurry] [pad] [numerics]
+    CONFIG is an optional TOML file (sections `[wafer]` `[process]` `[slurry]` `[pad]` `[numerics]`
     or flat keys; values with units such as "4 psi" or SI numbers). See `cmpsim params`.
     """
     from .equilibrium import EquilibriumError
@@ -79,7 +80,7 @@ def run(config, assignments, as_json, out_dir):
     except ValueError as exc:
         _fail(str(exc))
     try:
-        result = solve(cfg)
+        result = solve(cfg, check_roots=check_roots)
     except EquilibriumError as exc:
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
@@ -103,6 +104,12 @@ def run(config, assignments, as_json, out_dir):
         console.print(
             f"[yellow]warning: the flow-factor tensor was regularised on {100 * result.flow_factor_floored_fraction:.1f} % "
             "of the faces: the film is outside the validity of the perturbation flow factors (docs/model.md)[/yellow]"
+        )
+    if result.root_scan is not None and len(result.root_scan.roots) != 1:
+        roots = ", ".join(f"{r:.3g}" for r in result.root_scan.roots) or "none"
+        console.print(
+            f"[yellow]warning: the attack-angle scan found {len(result.root_scan.roots)} moment roots "
+            f"(at {roots} rad); the equilibrium above is the one Newton reached from the default start[/yellow]"
         )
     if out_dir:
         console.print(f"wrote {out_dir}/fields.nc, maps.png, result.json, config.toml")
@@ -172,6 +179,8 @@ def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, 
     out = Path(out_path) if out_path else Path.cwd() / (Path(sweep_file).stem + ".nc")
     where = f"Dask cluster at {scheduler}" if scheduler else ("this process (no Dask)" if workers == 0 else "a local Dask cluster")
     click.echo(f"sweep: {spec.n_points} points ({' x '.join(f'{d} {n}' for d, n in zip(spec.dims, spec.shape))}) on {where} -> {out}")
+    for message in spec.invalid_values():
+        click.echo(f"warning: {message}; the points with this value will be recorded as invalid", err=True)
     t0 = _time.perf_counter()
     try:
         ds = run_sweep(
@@ -251,7 +260,7 @@ def reproduce_command(out_dir, grid, config_path):
     curves), writes figNN_*.png and figNN_*.csv, and checks each qualitative statement the
     paper makes about them against the data of the run (REPORT.md / REPORT.html, trends.csv).
     """
-    from .reproduce import reproduce
+    from .reproduction import reproduce
 
     try:
         cfg = load_config(config_path, ())

@@ -223,14 +223,15 @@ class WaferProblem:
 
         h_lo = -shape.min() + 1e-3 * self.sigma  # smallest h0 with a positive film everywhere
         cutoff = self.pad.height_cutoff if np.isfinite(self.pad.height_cutoff) else 12.0
-        h_hi = -shape.max() + self.separation_offset + cutoff * self.pad.sigma_s
+        # beyond this h0 even the lowest point of the wafer clears every summit: no contact
+        h_hi = -shape.min() + self.separation_offset + cutoff * self.pad.sigma_s
         if excess(h_lo) < 0:
             raise EquilibriumError(
                 "the applied load exceeds what the pad asperities can carry before the wafer "
                 f"touches the pad mean plane (contact pressure at zero film is {excess(h_lo) + 1:.3g} "
                 "x the applied pressure); lower applied_pressure or stiffen the pad"
             )
-        h0 = brentq(excess, h_lo, max(h_hi, h_lo * 1.0001 + 1e-12), xtol=1e-6 * self.sigma, rtol=1e-12)
+        h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * self.sigma, rtol=1e-12)
         return np.array([h0, 0.0, 0.0])
 
     def fluid_start(self) -> np.ndarray:

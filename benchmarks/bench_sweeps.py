@@ -1,0 +1,145 @@
+"""Throughput of `cmpsim.sweep`: serial vs 2 local Dask workers, and warm vs cold Newton starts.
+
+Run: python benchmarks/bench_sweeps.py [--grid default] [--pressures 8] [--speeds 8] [--repeat 3]
+
+The same sweep (applied_pressure x rotation_speed, LEP model, and the same for the
+hydrodynamic model where the cold start is expensive) is timed
+
+* serially in this process (``workers=0``) and on a ``LocalCluster`` of 2 single-threaded
+  worker processes (created once; the cluster start-up is reported separately, and included
+  in the end-to-end figure that ``cmpsim sweep --workers 2`` sees);
+* with and without the warm start (serial), counting Newton iterations and pressure solves
+  (sparse LU factorisations).
+
+Every configuration is run once untimed first (imports, the cached reference solve of
+``removal_rate_relative``), then ``--repeat`` times; the best time is kept. Ratios are the
+numbers to compare across machines; on a machine shared with other jobs they are noisy.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import time
+
+import numpy as np
+
+
+def make_spec(grid: str, model: str, n_p: int, n_s: int):
+    from cmpsim.sweeps import SweepSpec
+
+    return SweepSpec.from_mapping(
+        {
+            "base": {"grid": grid, "model": model},
+            "axes": {
+                "applied_pressure": {"start": "3psi", "stop": "5psi", "num": n_p},
+                "rotation_speed": {"start": "40rpm", "stop": "80rpm", "num": n_s},
+            },
+        }
+    )
+
+
+def timed(fn, repeat: int):
+    fn()  # warm-up: imports, reference-case cache
+    best, out = float("inf"), None
+    for _ in range(repeat):
+        t = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t)
+    return best, out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--grid", default="default")
+    ap.add_argument("--pressures", type=int, default=8)
+    ap.add_argument("--speeds", type=int, default=8)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--json", dest="json_path", help="also write the numbers to this JSON file")
+    args = ap.parse_args()
+
+    from distributed import Client
+
+    import cmpsim
+    from cmpsim.sweeps import local_cluster, sweep
+
+    report: dict = {"grid": args.grid, "cmpsim_version": cmpsim.__version__}
+    spec = make_spec(args.grid, "lep", args.pressures, args.speeds)
+    n = spec.n_points
+    report["points"] = n
+    print(f"sweep: {n} points (applied_pressure {args.pressures} x rotation_speed {args.speeds}), grid {args.grid}, LEP")
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    print(f"{cores} cores; load average before: {os.getloadavg()[0]:.2f} (other jobs on the machine distort the ratios)")
+    report["cores"] = cores
+    report["load_before"] = os.getloadavg()[0]
+
+    # ---------------------------------------------------------------- serial vs 2 workers
+    # serial and 2-worker runs alternate, so that other jobs on the machine hit both alike
+    t0 = time.perf_counter()
+    cluster = local_cluster(2)  # the cluster `cmpsim sweep --workers 2` starts
+    client = Client(cluster)
+    t_startup = time.perf_counter() - t0
+    try:
+        sweep(spec, workers=0, progress=False)  # warm-up: imports, reference-case cache
+        sweep(spec, scheduler=client, progress=False)
+        t_serial = t_two = float("inf")
+        for _ in range(args.repeat):
+            t = time.perf_counter()
+            ds_serial = sweep(spec, workers=0, progress=False)
+            t_serial = min(t_serial, time.perf_counter() - t)
+            t = time.perf_counter()
+            ds_two = sweep(spec, scheduler=client, progress=False)
+            t_two = min(t_two, time.perf_counter() - t)
+    finally:
+        client.close()
+        cluster.close()
+    same = ds_two.identical(ds_serial)
+    r_compute = t_serial / t_two
+    r_end = t_serial / (t_two + t_startup)
+    print(f"  serial (workers=0):          {n / t_serial:7.2f} points/s  ({t_serial:.2f} s)")
+    print(f"  LocalCluster, 2 workers:     {n / t_two:7.2f} points/s  ({t_two:.2f} s; cluster start-up {t_startup:.2f} s extra)")
+    print(f"  ratio 2 workers / serial:    {r_compute:.2f} x (sweep only), {r_end:.2f} x (including cluster start-up)")
+    print(f"  2-worker dataset identical to serial: {same}")
+    report.update(
+        serial_points_per_s=n / t_serial,
+        two_workers_points_per_s=n / t_two,
+        cluster_startup_s=t_startup,
+        ratio_two_workers_over_serial=r_compute,
+        ratio_two_workers_over_serial_with_startup=r_end,
+        two_workers_identical_to_serial=bool(same),
+    )
+
+    # ---------------------------------------------------------------- warm vs cold
+    for model in ("lep", "hydrodynamic"):
+        s = spec if model == "lep" else make_spec(args.grid, model, args.pressures, args.speeds)
+        t_warm, warm = timed(lambda: sweep(s, workers=0, progress=False), args.repeat)
+        t_cold, cold = timed(lambda: sweep(s, workers=0, progress=False, warm_start=False), args.repeat)
+        ok = (warm["status"].values == "ok") & (cold["status"].values == "ok")
+        it_w, it_c = int(warm["iterations"].values[ok].sum()), int(cold["iterations"].values[ok].sum())
+        fa_w, fa_c = int(warm["factorizations"].values[ok].sum()), int(cold["factorizations"].values[ok].sum())
+        dev = float(
+            np.max(np.abs(warm["film_thickness_center_m"].values[ok] / cold["film_thickness_center_m"].values[ok] - 1.0))
+        )
+        print(f"warm vs cold start, {model} ({int(ok.sum())} of {n} points converged both ways), serial:")
+        print(f"  throughput warm / cold:      {t_cold / t_warm:.2f} x  ({n / t_warm:.2f} vs {n / t_cold:.2f} points/s)")
+        print(f"  Newton iterations:           {it_w} vs {it_c}  ({100 * (1 - it_w / it_c):.0f}% saved)")
+        print(f"  pressure solves (LU):        {fa_w} vs {fa_c}  ({100 * (1 - fa_w / fa_c):.0f}% saved)")
+        print(f"  max relative change of the centre film thickness: {dev:.1e}")
+        report[f"warm_{model}"] = dict(
+            ratio_throughput_warm_over_cold=t_cold / t_warm,
+            iterations_warm=it_w,
+            iterations_cold=it_c,
+            factorizations_warm=fa_w,
+            factorizations_cold=fa_c,
+            max_rel_film_change=dev,
+        )
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+    report["load_after"] = os.getloadavg()[0]
+    if args.json_path:
+        with open(args.json_path, "w") as f:
+            json.dump(report, f, indent=2)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,27 @@
+"""# Quick start
+
+Solve the paper's base case and draw its wafer maps: the script behind the
+[quick start](../index.md).
+"""
+
+# --8<-- [start:code]
+import os
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # no display needed
+import matplotlib.pyplot as plt
+
+import cmpsim
+
+GRID = os.environ.get("CMPSIM_DOCS_GRID", "default")
+OUT = Path(os.environ.get("CMPSIM_DOCS_OUT", Path(__file__).parent / "_output" / Path(__file__).stem))
+OUT.mkdir(parents=True, exist_ok=True)
+
+result = cmpsim.solve(grid=GRID)  # 3-inch wafer, 4 psi, 60 rpm, 100 nm particles, 15 um pad
+print(result.summary())
+fig = result.plot()  # film thickness, slurry pressure, contact pressure, removal rate
+fig.savefig(OUT / "maps.png", dpi=90)
+plt.close(fig)
+# --8<-- [end:code]
