@@ -36,6 +36,7 @@ from .validation import (
     model_value,
     point_config,
     solve_point,
+    solve_points,
 )
 
 __all__ = ["calibrate", "CalibrationResult", "CalibrationError", "default_bounds", "CALIBRATABLE"]
@@ -229,25 +230,8 @@ class _Problem:
         return self.base.replace(**self.values_of(z))
 
     def model(self, z) -> tuple[np.ndarray, list[Any], list[str]]:
-        cfg = self.config_of(z)
-        vals, results, statuses = [], [], []
-        same: dict[tuple, tuple] = {}  # points at identical conditions share one equilibrium
-        for i, (ds, p) in enumerate(self.points):
-            key = tuple(sorted(p.conditions.items()))
-            if key not in same:
-                pc = point_config(cfg, p.conditions)
-                same[key] = solve_point(pc, start=self.warm.get(key))
-                self.equilibria += 1
-            res, msg = same[key]
-            if res is None:
-                vals.append(float("nan"))
-                results.append(None)
-                statuses.append(f"no equilibrium: {msg}")
-            else:
-                self.warm[key] = res.solution.state.u
-                vals.append(model_value(res, p.quantity))
-                results.append(res)
-                statuses.append("ok")
+        vals, results, statuses, solved = solve_points([p for _, p in self.points], self.config_of(z), warm=self.warm)
+        self.equilibria += solved
         return np.array(vals), results, statuses
 
     def whiten(self, m: np.ndarray) -> np.ndarray:

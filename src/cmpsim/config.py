@@ -287,11 +287,11 @@ class Config:
     @classmethod
     def from_toml(cls, path) -> "Config":
         """Read a TOML file (sections or flat keys; values with units or SI numbers)."""
+        from .io import read_text
+
         path = Path(path)
         try:
-            data = tomllib.loads(path.read_text())
-        except FileNotFoundError:
-            raise ValueError(f"config file {str(path)!r} does not exist") from None
+            data = tomllib.loads(read_text(path, "config file"))
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
         return cls.from_mapping(data)

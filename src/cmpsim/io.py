@@ -7,7 +7,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text"]
 
 
 @contextlib.contextmanager
@@ -38,3 +38,16 @@ def atomic_write_text(path: Path, text: str) -> None:
     """Write ``text`` to ``path`` atomically (UTF-8)."""
     with atomic_path(Path(path)) as tmp:
         tmp.write_text(text, encoding="utf-8")
+
+
+def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str:
+    """The UTF-8 text of an input file, or ``error`` saying which file (``what``) and why."""
+    path = Path(path)
+    try:
+        return path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise error(f"{what} {str(path)!r} does not exist") from None
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc}") from None
+    except OSError as exc:
+        raise error(f"cannot read {what} {str(path)!r}: {exc}") from None

@@ -226,13 +226,10 @@ class SweepSpec:
     @classmethod
     def from_toml(cls, path) -> "SweepSpec":
         """Read and validate a sweep file."""
+        from .io import read_text
+
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except FileNotFoundError:
-            raise SweepError(f"sweep file {str(path)!r} does not exist") from None
-        except OSError as exc:
-            raise SweepError(f"cannot read sweep file {str(path)!r}: {exc}") from None
+        text = read_text(path, "sweep file", SweepError)
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:

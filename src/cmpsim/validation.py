@@ -228,13 +228,10 @@ def load_datasets(path) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
+    from .io import read_text
+
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise DataError(f"data file {str(path)!r} does not exist") from None
-    except UnicodeDecodeError as exc:
-        raise DataError(f"data file {str(path)!r} is not UTF-8 text: {exc}") from None
+    text = read_text(path, "data file", DataError)
     meta: dict[str, str] = {}
     body_lines: list[tuple[int, str]] = []
     for i, line in enumerate(text.splitlines(), start=1):
@@ -804,32 +801,43 @@ def evaluate_dataset(ds: Dataset, values_si: Sequence[float], results: Sequence[
     return rows, summary
 
 
-def run_dataset(ds: Dataset, config: Config, relative: bool = False, advance: Callable[[], None] | None = None):
-    """Solve every point of a data set (warm start from the previous point). Returns (values, results, statuses).
+def solve_points(points, config: Config, relative: bool = False, warm: dict | None = None, advance: Callable[[], None] | None = None):
+    """Model value, result and status of each measured point; returns (values, results, statuses, equilibria).
 
-    Points at identical conditions share one equilibrium.
+    Points at identical conditions share one equilibrium. Each new equilibrium starts from
+    ``warm[conditions]`` when a ``warm`` dict is given (it is updated in place with every
+    converged position, as calibration needs across its iterations), otherwise from the
+    previous converged point.
     """
     values, results, statuses = [], [], []
-    start = None
-    same: dict[tuple, tuple] = {}  # points at identical conditions share one equilibrium
-    for p in ds.points:
+    same: dict[tuple, tuple] = {}
+    previous = None
+    for p in points:
         key = tuple(sorted(p.conditions.items()))
         if key not in same:
-            cfg = point_config(config, p.conditions)
-            same[key] = solve_point(cfg, start=start, relative=relative)
+            start = warm.get(key) if warm is not None else previous
+            same[key] = solve_point(point_config(config, p.conditions), start=start, relative=relative)
         res, msg = same[key]
         if res is None:
             values.append(float("nan"))
             results.append(None)
             statuses.append(f"no equilibrium: {msg}")
         else:
+            previous = res.solution.state.u
+            if warm is not None:
+                warm[key] = previous
             values.append(model_value(res, p.quantity))
             results.append(res)
-            statuses.append("ok" if res.scalars["flow_factor_floored_fraction"] == 0 else f"ok (flow factors regularised on {100 * res.scalars['flow_factor_floored_fraction']:.0f} % of faces)")
-            start = res.solution.state.u
+            floored = res.scalars["flow_factor_floored_fraction"]
+            statuses.append("ok" if floored == 0 else f"ok (flow factors regularised on {100 * floored:.0f} % of faces)")
         if advance is not None:
             advance()
-    return values, results, statuses
+    return values, results, statuses, len(same)
+
+
+def run_dataset(ds: Dataset, config: Config, relative: bool = False, advance: Callable[[], None] | None = None):
+    """Solve every point of a data set (warm start from the previous point). Returns (values, results, statuses)."""
+    return solve_points(ds.points, config, relative=relative, advance=advance)[:3]
 
 
 def validate(paths=None, config: Config | None = None, grid: str | None = None, progress: bool = False) -> ValidationReport:
