@@ -48,7 +48,7 @@ PLASTIC_RATIO = 54.0
 #: Each band is integrated only where phi is within exp(-40) of its largest value on the
 #: band (at most _WINDOW standardised heights away from it; see _window).
 _WINDOW = 10.0
-_NODES = 64
+_NODES = 32
 #: Points per block in asperity_contact.
 _BLOCK = 512
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(_NODES)
