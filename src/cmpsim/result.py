@@ -278,9 +278,13 @@ class Result:
         fig, axes = plt.subplots(nrow, ncol, figsize=(5.2 * ncol, 4.4 * nrow), squeeze=False, layout="constrained")
         xmm = ds.x.values * 1e3
         ymm = ds.y.values * 1e3
+        # cells centred on the rim would overhang the wafer by half a pixel: leave them blank
+        half = 0.5 * (ds.x.values[1] - ds.x.values[0])
+        X, Y = np.meshgrid(ds.x.values, ds.y.values)
+        drawn = np.hypot(X, Y) <= 0.5 * self.config.wafer_diameter - half
         for ax, name in zip(axes.flat, fields):
             f, unit = scale.get(name, (1.0, FIELDS[name][0]))
-            im = ax.pcolormesh(xmm, ymm, ds[name].values * f, shading="auto", cmap="viridis")
+            im = ax.pcolormesh(xmm, ymm, np.where(drawn, ds[name].values * f, np.nan), shading="auto", cmap="viridis")
             ax.set_aspect("equal")
             ax.set_xlabel("x, sliding direction (mm)")
             ax.set_ylabel("y (mm)")
