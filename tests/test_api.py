@@ -101,3 +101,16 @@ def test_summary_lists_every_scalar_with_a_unit():
     text = r.summary()
     for key in r.scalars:
         assert key in text
+
+
+def test_field_maps_keep_the_solver_identities_up_to_the_rim():
+    """total = slurry + contact and slurry = 0 on the rim, in the exported maps (a review found the
+    rim values extrapolated a whole ring too far)."""
+    r = cmpsim.solve(grid="coarse")
+    ds = r.fields
+    tot, slurry, contact = ds.total_pressure.values, ds.slurry_pressure.values, ds.contact_pressure.values
+    ok = np.isfinite(tot)
+    assert np.max(np.abs(tot[ok] - slurry[ok] - contact[ok])) < 1e-9 * np.nanmax(np.abs(tot))
+    X, Y = np.meshgrid(ds.x.values, ds.y.values)
+    rim = ok & (np.hypot(X, Y) > 0.5 * r.config.wafer_diameter * (1 - 1e-9))
+    assert rim.any() and np.max(np.abs(slurry[rim])) < 1e-9 * np.nanmax(np.abs(slurry))

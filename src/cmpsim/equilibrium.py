@@ -183,7 +183,7 @@ class WaferProblem:
         system = ReynoldsSystem(self.grid, coeffs)
         phi = system.solve()
         self.factorizations += 1
-        if not np.all(np.isfinite(phi)) or phi.max() > 600.0:
+        if not np.all(np.isfinite(phi)) or phi.max() > 300.0:  # p > 1e130 p0: no physical state
             raise ValueError(
                 f"the slurry pressure diverges (ln(p/p0) up to {np.nanmax(phi):.3g}) at a minimum film of "
                 f"{h.min() / self.sigma:.3g} sigma; flow factors regularised on "
@@ -241,9 +241,14 @@ class WaferProblem:
         vals = []
         for factor in (1.0, 1.5, 2.0, 3.0, 5.0, 8.0):
             h0 = h_lo * factor + (factor - 1.0) * self.sigma
-            vals.append((h0, self.state([h0, 0.0, 0.0]).residual[0]))
+            try:
+                vals.append((h0, self.state([h0, 0.0, 0.0]).residual[0]))
+            except ValueError:  # diverging pressure at a thin film: overloaded
+                vals.append((h0, np.inf))
         for (a, fa), (b, fb) in zip(vals, vals[1:]):
             if fa > 0 >= fb or fa < 0 <= fb:
+                if not np.isfinite(fa):
+                    return np.array([b, 0.0, 0.0])
                 return np.array([a + (b - a) * fa / (fa - fb), 0.0, 0.0])
         best = min(vals, key=lambda v: abs(v[1]))
         return np.array([best[0], 0.0, 0.0])
@@ -344,7 +349,10 @@ def solve_equilibrium(
         If the film would have to touch the pad, or Newton cannot reduce the residual.
     """
     if start is None:
-        start = problem.fluid_start() if problem.variant == "hydrodynamic" else problem.contact_only_start()
+        try:
+            start = problem.fluid_start() if problem.variant == "hydrodynamic" else problem.contact_only_start()
+        except ValueError as exc:  # a kernel refused every trial film
+            raise EquilibriumError(f"no admissible start position: {exc}") from exc
     u = np.asarray(start, dtype=float).copy()
     try:
         st = problem.state(u)
@@ -396,8 +404,8 @@ def solve_equilibrium(
 class RootScan:
     """Moment residual along a scan of attack angles, the load balanced at each (h0 by Brent).
 
-    ``roots`` are the attack angles (rad) where the moment about y changes sign, found by
-    linear interpolation between scan points; more than one means the equilibrium is not
+    ``roots`` are the attack angles (rad) where the moment about y changes sign, bracketed by
+    the scan and polished with Brent's method; more than one means the equilibrium is not
     unique along this line (cross tilt held at its equilibrium value).
     """
 
@@ -423,9 +431,22 @@ def scan_moment_roots(problem: WaferProblem, solution: EquilibriumSolution, n: i
             moments[k] = problem.state(u).residual[1]
         except (EquilibriumError, ValueError):
             continue
+    def moment(th):
+        u = balance_load(problem, [st.u[0], th, st.u[2]])
+        return problem.state(u).residual[1]
+
     roots = []
     for k in range(n - 1):
         a, b = moments[k], moments[k + 1]
-        if np.isfinite(a) and np.isfinite(b) and (a == 0 or a * b < 0):
-            roots.append(float(thetas[k] - a * (thetas[k + 1] - thetas[k]) / (b - a)))
+        if not (np.isfinite(a) and np.isfinite(b)):
+            continue
+        if a == 0:
+            roots.append(float(thetas[k]))
+        elif a * b < 0:
+            # polish the bracketed root (each evaluation is one load balance)
+            try:
+                root = brentq(moment, thetas[k], thetas[k + 1], xtol=1e-4 * (thetas[1] - thetas[0]), maxiter=30)
+            except (EquilibriumError, ValueError, RuntimeError):
+                root = thetas[k] - a * (thetas[k + 1] - thetas[k]) / (b - a)
+            roots.append(float(root))
     return RootScan(thetas, moments, roots)

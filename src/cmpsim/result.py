@@ -183,7 +183,8 @@ class Result:
         t = np.concatenate([[t[-1] - 2 * np.pi], t, [t[0] + 2 * np.pi]])
         v = np.concatenate([values[:, -1:], values, values[:, :1]], axis=1)
         centre = np.full((1, v.shape[1]), values[0].mean())
-        edge = 2.0 * v[-1:] - v[-2:-1] if edge_value is None else np.full((1, v.shape[1]), edge_value)
+        # the last centres lie dr/2 inside the rim: linear extrapolation over half a ring
+        edge = 1.5 * v[-1:] - 0.5 * v[-2:-1] if edge_value is None else np.full((1, v.shape[1]), edge_value)
         v = np.concatenate([centre, v, edge], axis=0)
         return RegularGridInterpolator((r, t), v, bounds_error=False, fill_value=None)
 
@@ -211,15 +212,24 @@ class Result:
                 area_ratio_elastoplastic=c.area_ratio_elastoplastic,
                 area_ratio_plastic=c.area_ratio_plastic,
             )
+        # the slurry fields are interpolated (their edge values are known exactly); the fields
+        # built from them and from the exact contact are recombined pointwise, so that the
+        # maps keep the identities of the solver (total = slurry + contact, ...)
+        edges = {"slurry_pressure": 0.0, "granular_pressure": self.scalars["ambient_pressure_pa"]}
+        values = dict(exact)
+        for name in FIELDS:
+            if name not in values and name not in ("total_pressure", "normal_stress"):
+                values[name] = self._polar_interpolator(self.polar[name], edges.get(name))(pts)
+        if "contact_pressure" in values:
+            a_r = values["area_ratio_elastic"] + values["area_ratio_elastoplastic"] + values["area_ratio_plastic"]
+            values["total_pressure"] = values["slurry_pressure"] + values["contact_pressure"]
+            values["normal_stress"] = (1.0 - a_r) * values["granular_pressure"] + values["contact_pressure"]
+        else:
+            values["total_pressure"] = values["slurry_pressure"]
+            values["normal_stress"] = values["granular_pressure"]
         for name in FIELDS:
             arr = np.full(X.shape, np.nan)
-            if name in exact:
-                arr[inside] = exact[name]
-            else:
-                edge = 0.0 if name in ("slurry_pressure",) else None
-                if name == "granular_pressure":
-                    edge = self.scalars["ambient_pressure_pa"]
-                arr[inside] = self._polar_interpolator(self.polar[name], edge)(pts)
+            arr[inside] = values[name]
             out[name] = arr
         return out
 
