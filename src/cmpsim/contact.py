@@ -379,13 +379,9 @@ class ContactTable:
             if last:
                 x = x[:-1]  # the cutoff itself is a zero of the weight
             exact = asperity_contact(x, pad, model)
-            splines = {}
-            for name in self._names:
-                vals = getattr(exact, name)
-                if last:
-                    vals = vals / self._weight(name, x)
-                splines[name] = CubicSpline(x, vals)
-            self._pieces.append((a, b, last, splines))
+            # one spline through all outputs at once (columns in the order of self._names)
+            cols = [getattr(exact, name) / (self._weight(name, x) if last else 1.0) for name in self._names]
+            self._pieces.append((a, b, last, CubicSpline(x, np.stack(cols, axis=1), axis=0)))
             mid = 0.5 * (x[1:] + x[:-1])
             ref = asperity_contact(mid, pad, model)
             got = self._evaluate_piece(self._pieces[-1], mid)
@@ -400,12 +396,11 @@ class ContactTable:
         return (self.cutoff - x) ** self._POWERS.get(name, 2.0)
 
     def _evaluate_piece(self, piece, x):
-        a, b, last, splines = piece
-        out = {}
-        for name, spl in splines.items():
-            v = spl(x)
-            out[name] = v * self._weight(name, x) if last else v
-        return out
+        a, b, last, spline = piece
+        v = spline(x)
+        return {
+            name: (v[:, k] * self._weight(name, x) if last else v[:, k]) for k, name in enumerate(self._names)
+        }
 
     def __call__(self, separation) -> ContactResult:
         """Contact at ``separation`` (m), like :func:`asperity_contact`."""

@@ -14,6 +14,7 @@ section "Flow-factor validity").
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -87,11 +88,18 @@ class RoughnessGeometry:
 
         Returns ``(omega_1, omega_2, psi_1, psi_2)`` already multiplied by (sigma_i/sigma)^2.
         """
-        s2 = self.sigma**2
-        w1, w2 = self.sigma_pad**2 / s2, self.sigma_wafer**2 / s2
-        om1, ps1 = orientation_coefficients(self.theta_pad, self.gamma_pad)
-        om2, ps2 = orientation_coefficients(self.theta_wafer, self.gamma_wafer)
-        return float(w1 * om1), float(w2 * om2), float(w1 * ps1), float(w2 * ps2)
+        return _weighted_orientation(
+            self.sigma_pad, self.sigma_wafer, self.gamma_pad, self.gamma_wafer, self.theta_pad, self.theta_wafer
+        )
+
+
+@lru_cache(maxsize=256)
+def _weighted_orientation(sigma_1, sigma_2, gamma_1, gamma_2, theta_1, theta_2) -> tuple[float, float, float, float]:
+    s2 = sigma_1**2 + sigma_2**2
+    w1, w2 = sigma_1**2 / s2, sigma_2**2 / s2
+    om1, ps1 = orientation_coefficients(theta_1, gamma_1)
+    om2, ps2 = orientation_coefficients(theta_2, gamma_2)
+    return float(w1 * om1), float(w2 * om2), float(w1 * ps1), float(w2 * ps2)
 
 
 def orientation_coefficients(theta, gamma):
