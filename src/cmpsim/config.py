@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Any
@@ -258,15 +258,18 @@ class Config:
         """{section: {name: SI value}}, the layout of the TOML file."""
         return {s: {n: getattr(getattr(self, s), n) for n in _section_fields(s)} for s in _SECTIONS}
 
-    def to_toml(self, path) -> None:
-        """Write every input to a TOML file in SI (floats written exactly); atomic."""
+    def to_toml_text(self) -> str:
+        """Every input as TOML text, by section, in SI (floats written exactly)."""
         import tomli_w
 
+        return tomli_w.dumps(self.to_sections())
+
+    def to_toml(self, path) -> None:
+        """Write every input to a TOML file in SI (floats written exactly); atomic."""
         from .io import atomic_write_text
 
         text = "# cmpsim configuration; every value in SI units (see `cmpsim params`)\n"
-        text += tomli_w.dumps(self.to_sections())
-        atomic_write_text(Path(path), text)
+        atomic_write_text(Path(path), text + self.to_toml_text())
 
     @classmethod
     def from_mapping(cls, data: dict[str, Any], base: "Config | None" = None) -> "Config":

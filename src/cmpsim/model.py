@@ -15,6 +15,7 @@ from .config import Config
 from .contact import PadSurface
 from .equilibrium import EquilibriumError, EquilibriumSolution, WaferProblem, scan_moment_roots, solve_equilibrium
 from .flowfactors import RoughnessGeometry, shear_stress_factors
+from .geometry import check_geometry
 from .grainflow import grain_coefficients, granular_pressure
 from .grid import PolarGrid
 from .kinematics import Kinematics
@@ -89,11 +90,10 @@ def physical_setup(config: Config) -> PhysicalSetup:
     return PhysicalSetup(pad, rough, kin, lub, p0, grid)
 
 
-def build_problem(config: Config) -> WaferProblem:
-    """The :class:`~cmpsim.equilibrium.WaferProblem` of a Config."""
-    s = physical_setup(config)
-    if config.dome_height >= 0.5 * config.wafer_diameter:
-        raise ValueError("dome_height must be smaller than the wafer radius")
+def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferProblem:
+    """The :class:`~cmpsim.equilibrium.WaferProblem` of a Config (``setup`` if already built)."""
+    s = setup or physical_setup(config)
+    check_geometry(config.dome_height, s.grid.radius)
     return WaferProblem(
         s.grid,
         config.dome_height,
@@ -185,10 +185,7 @@ def _reference_removal_rate(config: Config) -> float:
     if key not in _REFERENCE_CACHE:
         if len(_REFERENCE_CACHE) > 256:
             _REFERENCE_CACHE.clear()
-        setup = physical_setup(ref)
-        problem = build_problem(ref)
-        sol = solve_equilibrium(problem, tol=ref.tolerance, max_iter=ref.max_iterations)
-        _REFERENCE_CACHE[key] = _outputs(ref, setup, problem, sol)[0]["removal_rate"]
+        _REFERENCE_CACHE[key] = solve(ref, relative=False).removal_rate
     return _REFERENCE_CACHE[key]
 
 
@@ -223,9 +220,11 @@ def solve(config: Config | None = None, start=None, relative: bool = True, check
     """
     from .result import Result
 
-    config = (config or Config.default()).replace(**overrides) if overrides else (config or Config.default())
+    config = config or Config.default()
+    if overrides:
+        config = config.replace(**overrides)
     setup = physical_setup(config)
-    problem = build_problem(config)
+    problem = build_problem(config, setup)
     sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
     scalars, polar = _outputs(config, setup, problem, sol)
     if relative:

@@ -253,7 +253,7 @@ class Result:
                 ds.attrs[k] = int(v) if isinstance(v, bool) else v
             ds.attrs["cmpsim_version"] = __version__
             ds.attrs["model"] = self.config.model
-            ds.attrs["config_toml"] = _config_text(self.config)
+            ds.attrs["config_toml"] = self.config.to_toml_text()
             self._fields = ds
         return self._fields
 
@@ -309,9 +309,3 @@ class Result:
             f"sigma = {format_display('pad_roughness', self.config.pad_roughness)} um"
         )
         return fig
-
-
-def _config_text(config: Config) -> str:
-    import tomli_w
-
-    return tomli_w.dumps(config.to_sections())

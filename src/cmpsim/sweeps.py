@@ -711,7 +711,6 @@ def _coord_attrs(name: str) -> dict:
 
 
 def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: str, warm_start: bool, chain_length: int):
-    import tomli_w
     import xarray as xr
 
     from .result import SCALARS
@@ -770,7 +769,7 @@ def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: 
         {
             "title": "cmpsim parameter sweep",
             "cmpsim_version": __version__,
-            "config_toml": tomli_w.dumps(spec.base.to_sections()),
+            "config_toml": spec.base.to_toml_text(),
             "sweep_toml": spec.source,
             "sweep_id": identity,
             "points_requested": int(spec.n_points),
