@@ -235,6 +235,11 @@ class Config:
         """The paper's base case (Table 1) plus the cited defaults of docs/model.md."""
         return cls()
 
+    @classmethod
+    def paper(cls) -> "Config":
+        """The paper's model exactly (``cmpsim run --preset paper``): the results of cmpsim 0.1.0."""
+        return cls()
+
     def __getattr__(self, name: str):
         p = PARAMETERS.get(name)
         if p is None:
