@@ -25,6 +25,8 @@ from cmpsim.result import SCALARS
 from cmpsim.sweeps import SweepError, SweepSpec, sweep
 
 CLI = [sys.executable, "-m", "cmpsim.cli"]
+#: The command line with a gate on which sweep points may finish (tests/sweep_gate.py).
+GATED = [sys.executable, str(Path(__file__).with_name("sweep_gate.py"))]
 
 SMALL = """
 [base]
@@ -139,22 +141,30 @@ def n_parts(parts: Path) -> int:
         return 0
 
 
+def wait_for_parts(parts: Path, k: int, proc, timeout: float = 300.0) -> None:
+    """Wait until k points are saved; the gated run can save no more, so nothing races."""
+    deadline = time.monotonic() + timeout
+    while n_parts(parts) < k:
+        assert proc.poll() is None, f"the sweep ended before saving {k} points: {proc.communicate()}"
+        assert time.monotonic() < deadline, f"no {k} saved points after {timeout} s"
+        time.sleep(0.05)
+
+
 def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path):
     path = write(tmp_path, KILL)
     out = tmp_path / "killed.nc"
     parts = Path(str(out) + ".parts")
-    proc = subprocess.Popen(CLI + ["sweep", str(path), "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+    # exactly two points can finish (the first two to start); the others block, so the run cannot end before the kill
+    proc = subprocess.Popen(GATED + ["2", str(tmp_path / "tokens"), "sweep", str(path), "--out", str(out)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
     try:
-        deadline = time.monotonic() + 120
-        while n_parts(parts) < 2 and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.01)
+        wait_for_parts(parts, 2, proc)
         os.killpg(proc.pid, signal.SIGKILL)  # the sweep and its dask workers, no clean-up
     finally:
         proc.wait(timeout=30)
     saved = n_parts(parts)
     assert proc.returncode == -signal.SIGKILL
     assert not out.exists(), "killed before the end: no final file"
-    assert 0 < saved < 24
+    assert saved == 2
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".killed.nc")], "no half-written output"
     # tamper with one saved point: if resume recomputed it, the mark would disappear
     victim = next(p for p in parts.iterdir() if p.name != "manifest.json" and p.suffix == ".json")
@@ -182,16 +192,15 @@ def test_ctrl_c_saves_the_finished_points_and_exits_130_without_worker_traceback
     path = write(tmp_path, KILL)
     out = tmp_path / "int.nc"
     parts = Path(str(out) + ".parts")
+    # exactly one point can finish (the first to start); the others block, so the run cannot end before the Ctrl-C
     proc = subprocess.Popen(
-        CLI + ["sweep", str(path), "--out", str(out), "--no-progress"],
+        GATED + ["1", str(tmp_path / "tokens"), "sweep", str(path), "--out", str(out), "--no-progress"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
     )
     try:
-        deadline = time.monotonic() + 120
-        while n_parts(parts) < 1 and proc.poll() is None and time.monotonic() < deadline:
-            time.sleep(0.01)
+        wait_for_parts(parts, 1, proc)
         os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole process group
-        stdout, stderr = proc.communicate(timeout=60)
+        stdout, stderr = proc.communicate(timeout=120)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -200,8 +209,34 @@ def test_ctrl_c_saves_the_finished_points_and_exits_130_without_worker_traceback
     line = next(ln for ln in stdout.splitlines() if ln.startswith("interrupted:"))
     assert f"points saved in {parts}" in line and "--resume" in line
     k = int(line.split()[1])
-    assert 0 < k < 24 and n_parts(parts) == k
+    assert k == 1 and n_parts(parts) == 1
     assert "Traceback" not in stderr and not out.exists()
+
+
+def test_interrupted_serial_sweep_keeps_exactly_the_finished_points_and_resumes_to_the_same_dataset(tmp_path, monkeypatch):
+    """The state logic in-process: an interrupt after three points saves three, resume ends equal."""
+    import cmpsim.sweeps as sweeps_module
+
+    real, calls = sweeps_module._run_point, []
+
+    def interrupt_after_three(task, prev=None, prev2=None):
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        calls.append(task["key"])
+        return real(task, prev, prev2)
+
+    path, out = write(tmp_path, SMALL), tmp_path / "s.nc"
+    messages = []
+    monkeypatch.setattr(sweeps_module, "_run_point", interrupt_after_three)
+    with pytest.raises(KeyboardInterrupt):
+        sweep(path, out=out, workers=0, progress=False, log=messages.append)
+    parts = Path(str(out) + ".parts")
+    assert n_parts(parts) == 3 and not out.exists()
+    assert messages == [f"interrupted: 3 of 4 points saved in {parts}; run again with --resume to finish"]
+    monkeypatch.setattr(sweeps_module, "_run_point", real)
+    resumed = sweep(path, out=out, workers=0, progress=False, resume=True, log=messages.append)
+    assert messages[-1] == "resumed: 3 of 4 points already done" and not parts.exists()
+    xr.testing.assert_identical(resumed, sweep(path, workers=0, progress=False))
 
 
 def test_resume_without_saved_state_starts_from_zero_and_says_so(tmp_path):
