@@ -1,0 +1,90 @@
+"""Outputs of a solved equilibrium: stresses, removal rate, and every scalar and wafer map.
+
+Pure post-processing of an :class:`~cmpsim.equilibrium.EquilibriumSolution`: evaluates the
+shear stress and the removal law on the solved pressure and film, integrates the scalars
+over the wafer and returns the polar fields.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .config import Config
+from .equilibrium import EquilibriumSolution, WaferProblem
+from .flowfactors import shear_stress_factors
+from .grainflow import grain_coefficients
+from .removal import contact_shear_stress, removal_rate, slurry_shear_stress
+from .setup import PhysicalSetup
+
+__all__ = ["evaluate_outputs"]
+
+
+def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem, sol: EquilibriumSolution):
+    """Scalars (SI) and polar fields (cell centres) of a solved equilibrium."""
+    st = sol.state
+    g = problem.grid
+    area = np.pi * g.radius**2
+    lub = setup.lubrication
+    xc, yc = problem.xc, problem.yc
+    # shear stress and removal rate
+    grad_phi = g.gradient(st.phi, 0.0)
+    grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
+    _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
+    phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
+    _, _, dux, duy = setup.kinematics.mean_and_relative(xc, yc)
+    ar = st.area_ratio
+    tsx, tsy = slurry_shear_stress(
+        st.p_slurry, grad_p, st.h, (dux, duy), lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a, phi_fs, phi_fp
+    )
+    tau_x = (1.0 - ar) * tsx
+    tau_y = (1.0 - ar) * tsy
+    if config.removal_shear == "total":
+        tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
+        tau_x, tau_y = tau_x + tcx, tau_y + tcy
+    tau = np.hypot(tau_x, tau_y)
+    sigma_n = (1.0 - ar) * st.p_slurry + st.p_contact
+    rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
+    # film thickness: centre, and minimum over the cell centres and the rim
+    u = st.u
+    rim_t = np.linspace(0.0, 2.0 * np.pi, 4 * g.n_theta, endpoint=False)
+    h_rim = problem.film(u, g.radius * np.cos(rim_t), g.radius * np.sin(rim_t))
+    h_center = float(problem.film(u, 0.0, 0.0))
+    load = problem.load_scale
+    scalars = {
+        "film_thickness_center_m": h_center,
+        "film_thickness_min_m": float(min(st.h.min(), h_rim.min())),
+        "h0_m": float(u[0]),
+        "attack_angle_rad": float(u[1]),
+        "cross_tilt_rad": float(u[2]),
+        "fluid_load_fraction": g.integrate(st.p_fluid) / load,
+        "contact_load_fraction": g.integrate(st.p_contact) / load,
+        "contact_area_ratio_elastic": g.integrate(st.area_elastic) / area,
+        "contact_area_ratio_elastoplastic": g.integrate(st.area_elastoplastic) / area,
+        "contact_area_ratio_plastic": g.integrate(st.area_plastic) / area,
+        "mean_normal_stress_pa": g.integrate(sigma_n) / area,
+        "mean_shear_stress_pa": g.integrate(tau) / area,
+        "removal_rate": g.integrate(rr) / area,
+        "ambient_pressure_pa": setup.ambient_pressure,
+        "sliding_speed_m_s": setup.kinematics.sliding_speed,
+        "load_residual": float(st.residual[0]),
+        "moment_residual": float(max(abs(st.residual[1]), abs(st.residual[2]))),
+        "flow_factor_floored_fraction": float(st.floored_fraction),
+        "iterations": int(sol.iterations),
+        "factorizations": int(sol.factorizations),
+        "converged": bool(sol.converged),
+    }
+    scalars["removal_rate_nm_per_min"] = scalars["removal_rate"] * 1e9 * 60.0
+    polar = {
+        "film_thickness": st.h,
+        "slurry_pressure": st.p_fluid,
+        "granular_pressure": st.p_slurry,
+        "contact_pressure": st.p_contact,
+        "total_pressure": st.p_total,
+        "area_ratio_elastic": st.area_elastic,
+        "area_ratio_elastoplastic": st.area_elastoplastic,
+        "area_ratio_plastic": st.area_plastic,
+        "normal_stress": sigma_n,
+        "shear_stress": tau,
+        "removal_rate": rr,
+    }
+    return scalars, polar

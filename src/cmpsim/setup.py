@@ -1,0 +1,99 @@
+"""The physical setup of one operating point: from a Config to the objects of the kernels.
+
+Turns the user's inputs (:class:`~cmpsim.config.Config`, SI) into the pad surface, the
+roughness, the kinematics, the lubrication parameters, the ambient pressure and the grid,
+and builds the :class:`~cmpsim.equilibrium.WaferProblem` that the equilibrium solver takes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .config import Config
+from .contact import PadSurface
+from .equilibrium import WaferProblem
+from .flowfactors import RoughnessGeometry
+from .geometry import check_geometry
+from .grainflow import granular_pressure
+from .grid import PolarGrid
+from .kinematics import Kinematics
+from .reynolds import LubricationParameters
+
+__all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "HAFF_T"]
+
+#: Haff's pressure constant t; the paper gives only t/a = 1, so t = a = 1 (docs/model.md).
+HAFF_T = 1.0
+
+
+@dataclass(frozen=True)
+class PhysicalSetup:
+    """The physical objects derived from a Config (all SI)."""
+
+    pad: PadSurface
+    roughness: RoughnessGeometry
+    kinematics: Kinematics
+    lubrication: LubricationParameters
+    ambient_pressure: float  # p0, Pa
+    grid: PolarGrid
+
+
+def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
+    """Effective modulus E' of eq. 22: 1/E' = (1 - nu1^2)/E1 + (1 - nu2^2)/E2, Pa."""
+    return 1.0 / ((1.0 - nu1**2) / e1 + (1.0 - nu2**2) / e2)
+
+
+def physical_setup(config: Config) -> PhysicalSetup:
+    """Pad, roughness, kinematics, grain-flow parameters, edge pressure and grid of a Config."""
+    c = config
+    sigma = c.pad_roughness
+    if c.roughness_scaling == "self_similar":
+        ratio = sigma / c.reference_roughness
+        radius, density = c.asperity_radius * ratio, c.asperity_density / ratio**2
+    else:
+        radius, density = c.asperity_radius, c.asperity_density
+    pad = PadSurface(
+        sigma_s=sigma,
+        asperity_density=density,
+        asperity_radius=radius,
+        e_star=effective_modulus(c.pad_modulus, c.pad_poisson, c.wafer_modulus, c.wafer_poisson),
+        hardness=c.pad_hardness,
+        poisson=c.pad_poisson,
+        height_cutoff=c.contact_cutoff,
+    )
+    rough = RoughnessGeometry(
+        sigma_pad=sigma,
+        sigma_wafer=c.wafer_roughness,
+        gamma_pad=c.peklenik_number,
+        gamma_wafer=1.0,
+        theta_pad=c.roughness_angle,
+    )
+    kin = Kinematics(c.rotation_speed, c.rotation_speed * c.wafer_speed_ratio, c.centre_distance, c.kinematics)
+    v = c.fluctuation_ratio * kin.sliding_speed
+    lub = LubricationParameters(
+        particle_diameter=c.particle_diameter,
+        w_over_k=c.w_over_k,
+        t_over_a=c.t_over_a,
+        fluctuation_velocity=v,
+        roughness=rough,
+        kinematics=kin,
+        flow_factor_floor=c.flow_factor_floor,
+    )
+    p0 = float(granular_pressure(c.granular_density, c.particle_diameter, c.diameter_gap_ratio, v, t=HAFF_T))
+    n_r, n_t = c.grid_shape
+    grid = PolarGrid(0.5 * c.wafer_diameter, n_r, n_t)
+    return PhysicalSetup(pad, rough, kin, lub, p0, grid)
+
+
+def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferProblem:
+    """The :class:`~cmpsim.equilibrium.WaferProblem` of a Config (``setup`` if already built)."""
+    s = setup or physical_setup(config)
+    check_geometry(config.dome_height, s.grid.radius)
+    return WaferProblem(
+        s.grid,
+        config.dome_height,
+        config.applied_pressure,
+        s.ambient_pressure,
+        s.lubrication,
+        s.pad,
+        config.model,
+    )
