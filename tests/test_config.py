@@ -99,3 +99,26 @@ def test_parameter_table_in_model_document_is_generated_from_the_registry():
 
     doc = (Path(__file__).parents[1] / "docs" / "model.md").read_text()
     assert parameter_table_markdown() in doc, "regenerate the table with `cmpsim params --markdown`"
+
+
+def test_paper_preset_differs_from_the_defaults_only_in_the_listed_inputs():
+    from cmpsim.config import PRESETS
+
+    paper, default = Config.paper().to_dict(), Config.default().to_dict()
+    changed = {k for k in default if paper[k] != default[k]}
+    assert changed <= set(PRESETS["paper"])
+    assert Config.preset("paper") == Config.paper()
+    with pytest.raises(ValueError, match="preset must be one of 'default', 'paper'"):
+        Config.preset("fast")
+
+
+def test_a_config_file_may_start_from_a_preset(tmp_path):
+    path = tmp_path / "c.toml"
+    path.write_text('preset = "paper"\n[process]\napplied_pressure = "3 psi"\n')
+    assert Config.from_toml(path) == Config.paper().replace(applied_pressure="3 psi")
+
+
+@pytest.mark.parametrize("value", ["1 m", "5 um"])
+def test_a_particle_larger_than_the_roughness_allows_is_refused_by_name_before_solving(value):
+    with pytest.raises(ValueError, match=r"particle_diameter .*(out of range|too large for pad_roughness).*valid range"):
+        Config.default().replace(particle_diameter=value, pad_roughness="15 um")

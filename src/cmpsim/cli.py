@@ -35,11 +35,12 @@ def parse_assignments(items) -> dict[str, str]:
     return out
 
 
-def load_config(config_path, assignments):
-    """Config from an optional TOML file plus --set overrides (raises ValueError)."""
+def load_config(config_path, assignments, preset: str | None = None):
+    """Config from a preset, an optional TOML file and --set overrides, in that order (raises ValueError)."""
     from .config import Config
 
-    cfg = Config.from_toml(config_path) if config_path else Config.default()
+    base = Config.preset(preset) if preset else Config.default()
+    cfg = Config.from_toml(config_path, base=base) if config_path else base
     return cfg.replace(**parse_assignments(assignments))
 
 
@@ -66,7 +67,8 @@ def main():
 @click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, result.json and config.toml to DIR.")
 @click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
-def run(config, assignments, as_json, out_dir, check_roots):
+@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
+def run(config, assignments, as_json, out_dir, check_roots, preset):
     """Solve one operating point (the paper's base case by default).
 
     CONFIG is an optional TOML file (sections `[wafer]` `[process]` `[slurry]` `[pad]` `[numerics]`
@@ -76,7 +78,7 @@ def run(config, assignments, as_json, out_dir, check_roots):
     from .model import solve
 
     try:
-        cfg = load_config(config, assignments)
+        cfg = load_config(config, assignments, preset)
     except ValueError as exc:
         _fail(str(exc))
     try:

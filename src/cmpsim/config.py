@@ -29,6 +29,7 @@ __all__ = [
     "parse_value",
     "parameter_table_markdown",
     "GRID_PRESETS",
+    "PRESETS",
 ]
 
 #: Named grids: rings x sectors of the polar finite-volume grid (see docs/model.md, "Grid").
@@ -81,9 +82,12 @@ PARAMETERS: dict[str, Param] = {
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
+        _P("removal_law", "process", "-", "choice", "", "paper", "Removal law: the paper's RR = K sigma_n tau, or the shear-power law RR = k_s (mu p_c + chi tau_f) |du|", "docs/model.md ('Removal rate'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023)", choices=("paper", "shear_power")),
+        _P("shear_power_coefficient", "process", "k_s", "1/Pa", "1/Pa", 2.5e-13, "Scale k_s of the shear-power removal law", "Scale only: k_s mu = 1e-13 1/Pa, the order of oxide Preston constants (Preston's k_p P U gives ~100 nm/min at 4 psi and 0.63 m/s); see docs/model.md", 0.0),
+        _P("fluid_shear_weight", "process", "chi", "", "", 0.0, "Share chi of the slurry's shear power that removes material in the shear-power law", "docs/model.md ('Removal rate'): removal needs abrasive contact pressure, which the slurry's bulk shear does not give", 0.0, 1.0, False, False),
         _P("removal_shear", "process", "-", "choice", "", "total", "Shear stress tau of the removal law: slurry plus pad-summit friction, or slurry only (Runnels & Eyman)", "docs/model.md ('Removal rate')", choices=("total", "slurry")),
         # ---------------------------------------------------------------- slurry (Haff grain flow)
-        _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter", "Paper Table 1 (100 nm; 200 nm studied)", 0.0),
+        _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter (also < pad_roughness / 10: particles must fit in the roughness layer that forms the film)", "Paper Table 1 (100 nm; 200 nm studied); CMP abrasives are 10 nm - 1 um (Lai 2001 used up to 1 um alumina), so the range stops at 2 um", 0.0, 2e-6, True, False),
         _P("w_over_k", "slurry", "w/k", "", "", 4e-6, "Haff dissipation over conductivity constant", "Paper Table 1 (see docs/model.md on w/k vs k/w)", 0.0),
         _P("t_over_a", "slurry", "t/a", "", "", 1.0, "Haff pressure over viscosity constant", "Paper Table 1; Dai et al.", 0.0),
         _P("fluctuation_ratio", "slurry", "v/U", "", "", 3.0, "Granular fluctuation velocity over sliding speed", "Paper Table 1 (V/U = 3)", 0.0),
@@ -116,6 +120,17 @@ PARAMETERS: dict[str, Param] = {
 
 _SECTIONS = ("wafer", "process", "slurry", "pad", "numerics")
 
+#: Named presets: the inputs in which each differs from the defaults of :data:`PARAMETERS`
+#: (values as a user would type them). ``paper`` is the paper's model exactly, as cmpsim
+#: 0.1.0 implemented it (``tests/test_paper_preset.py`` pins its results); ``default`` is
+#: the predictive model of docs/model.md ("Beyond the paper").
+PRESETS: dict[str, dict[str, Any]] = {
+    "default": {},
+    "paper": {
+        "removal_law": "paper",
+    },
+}
+
 
 @lru_cache(maxsize=1)
 def _ureg():
@@ -137,6 +152,22 @@ def _check_range(p: Param, v: float) -> float:
             raise ValueError(f"max_iterations must be an integer; valid range {p.range_text()}")
         return int(v)
     return float(v)
+
+
+#: Largest particle diameter over pad roughness: the grain-flow and average-flow pictures need
+#: many particles across the roughness layer that forms the film (docs/model.md, "Valid inputs").
+MAX_PARTICLE_ROUGHNESS_RATIO = 0.1
+
+
+def _check_consistency(c: "Config") -> None:
+    """Refuse combinations of inputs that make the model meaningless, naming the parameters."""
+    limit = MAX_PARTICLE_ROUGHNESS_RATIO * c.pad.pad_roughness
+    if c.slurry.particle_diameter >= limit:
+        raise ValueError(
+            f"particle_diameter = {c.slurry.particle_diameter:g} m is too large for pad_roughness = "
+            f"{c.pad.pad_roughness:g} m: valid range (0, {limit:g}) m, i.e. below {MAX_PARTICLE_ROUGHNESS_RATIO:g} x pad_roughness "
+            "(a particle must fit many times in the roughness layer that forms the film)"
+        )
 
 
 def _parse_grid(value: Any) -> str:
@@ -236,9 +267,16 @@ class Config:
         return cls()
 
     @classmethod
+    def preset(cls, name: str) -> "Config":
+        """A named preset of :data:`PRESETS`: ``"default"`` or ``"paper"``."""
+        if name not in PRESETS:
+            raise ValueError(f"preset must be one of {', '.join(repr(p) for p in PRESETS)}; got {name!r}")
+        return cls().replace(**PRESETS[name])
+
+    @classmethod
     def paper(cls) -> "Config":
         """The paper's model exactly (``cmpsim run --preset paper``): the results of cmpsim 0.1.0."""
-        return cls()
+        return cls.preset("paper")
 
     def __getattr__(self, name: str):
         p = PARAMETERS.get(name)
@@ -252,8 +290,9 @@ class Config:
         for name, value in overrides.items():
             v = parse_value(name, value)
             groups.setdefault(PARAMETERS[name].section, {})[name] = v
-        new = {s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS}
-        return Config(**new)
+        new = Config(**{s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS})
+        _check_consistency(new)
+        return new
 
     def to_dict(self) -> dict[str, Any]:
         """Flat {name: SI value} of every input."""
@@ -278,8 +317,14 @@ class Config:
 
     @classmethod
     def from_mapping(cls, data: dict[str, Any], base: "Config | None" = None) -> "Config":
-        """Build from a flat or sectioned mapping; values with units or SI numbers."""
+        """Build from a flat or sectioned mapping; values with units or SI numbers.
+
+        A top-level ``preset = "paper"`` starts from that preset instead of ``base``.
+        """
         flat: dict[str, Any] = {}
+        data = dict(data)
+        if "preset" in data:
+            base = cls.preset(str(data.pop("preset")))
         for key, value in data.items():
             if key in _SECTIONS and isinstance(value, dict):
                 for k, v in value.items():
@@ -293,8 +338,12 @@ class Config:
         return (base or cls.default()).replace(**flat)
 
     @classmethod
-    def from_toml(cls, path) -> "Config":
-        """Read a TOML file (sections or flat keys; values with units or SI numbers)."""
+    def from_toml(cls, path, base: "Config | None" = None) -> "Config":
+        """Read a TOML file (sections or flat keys; values with units or SI numbers).
+
+        Inputs the file does not set come from ``base`` (default: the defaults), or from the
+        file's own top-level ``preset = "..."``.
+        """
         from .io import read_text
 
         path = Path(path)
@@ -302,7 +351,7 @@ class Config:
             data = tomllib.loads(read_text(path, "config file"))
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
-        return cls.from_mapping(data)
+        return cls.from_mapping(data, base=base)
 
     @property
     def grid_shape(self) -> tuple[int, int]:

@@ -13,7 +13,7 @@ from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
 from .flowfactors import shear_stress_factors
 from .grainflow import grain_coefficients
-from .removal import contact_shear_stress, removal_rate, slurry_shear_stress
+from .removal import contact_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
 from .setup import PhysicalSetup
 
 __all__ = ["evaluate_outputs"]
@@ -43,7 +43,13 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         tau_x, tau_y = tau_x + tcx, tau_y + tcy
     tau = np.hypot(tau_x, tau_y)
     sigma_n = (1.0 - ar) * st.p_slurry + st.p_contact
-    rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
+    if config.removal_law == "shear_power":
+        rr = shear_power_removal_rate(
+            st.p_contact, np.hypot((1.0 - ar) * tsx, (1.0 - ar) * tsy), np.hypot(dux, duy),
+            config.shear_power_coefficient, config.friction_coefficient, config.fluid_shear_weight,
+        )
+    else:
+        rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
     # film thickness: centre, and minimum over the cell centres and the rim
     u = st.u
     rim_t = np.linspace(0.0, 2.0 * np.pi, 4 * g.n_theta, endpoint=False)

@@ -1,13 +1,21 @@
-"""Shear stress on the wafer and the Runnels–Eyman removal rate RR = K sigma_n tau.
+"""Shear stress on the wafer and the removal laws.
 
-Pure vectorised kernels (SI units). See ``docs/model.md``, section "Removal rate".
+Two removal laws (``removal_law``): the paper's Runnels–Eyman law RR = K sigma_n tau, and
+the shear-power law RR = k_s (mu p_c + chi tau_f) |u_pad - u_wafer| (the rate follows the
+frictional power delivered to the wafer surface; Borucki et al., ECS J. Solid State Sci.
+Technol. 12, 044004 (2023), doi 10.1149/2162-8777/accaa6), which reduces to Preston's law
+k_s mu P U in full contact. Pure vectorised kernels (SI units). See ``docs/model.md``,
+section "Removal rate".
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["slurry_shear_stress", "contact_shear_stress", "removal_rate"]
+__all__ = ["slurry_shear_stress", "contact_shear_stress", "removal_rate", "shear_power_removal_rate", "REMOVAL_LAWS"]
+
+#: Removal laws: the paper's (Runnels–Eyman) and the shear-power law.
+REMOVAL_LAWS = ("paper", "shear_power")
 
 
 def slurry_shear_stress(p_abs, grad_p, h, du, particle_diameter, fluctuation_velocity, t_over_a, phi_fs, phi_fp):
@@ -59,3 +67,33 @@ def removal_rate(normal_stress, shear_stress, preston_coefficient):
     """
     tau = np.hypot(shear_stress[0], shear_stress[1])
     return preston_coefficient * np.asarray(normal_stress) * tau
+
+
+def shear_power_removal_rate(contact_pressure, fluid_shear_stress, relative_speed, coefficient, friction_coefficient, fluid_shear_weight):
+    """Shear-power removal rate RR = k_s (mu p_c + chi |tau_f|) |du|, m/s.
+
+    The removal follows the shear power delivered to the wafer surface per unit area: the
+    summit friction mu p_c and a share chi of the slurry shear |tau_f|, each times the local
+    sliding speed |du| (Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023),
+    doi 10.1149/2162-8777/accaa6). In full contact (p_c = P, tau_f = 0) it is Preston's law
+    RR = k_s mu P U (Preston, J. Soc. Glass Technol. 11, 214 (1927)).
+
+    Parameters
+    ----------
+    contact_pressure : array
+        Nominal pad-summit contact pressure p_c on the wafer, Pa.
+    fluid_shear_stress : array or tuple of arrays
+        Slurry shear stress on the wafer tau_f, Pa (a magnitude, or its (x, y) components).
+    relative_speed : array
+        Local sliding speed |u_pad - u_wafer|, m/s.
+    coefficient : float
+        k_s, 1/Pa (> 0): the scale of the law.
+    friction_coefficient : float
+        mu, dimensionless.
+    fluid_shear_weight : float
+        chi in [0, 1]: share of the slurry's shear power that removes material.
+    """
+    if isinstance(fluid_shear_stress, tuple):
+        fluid_shear_stress = np.hypot(fluid_shear_stress[0], fluid_shear_stress[1])
+    power = friction_coefficient * np.asarray(contact_pressure) + fluid_shear_weight * np.abs(fluid_shear_stress)
+    return coefficient * power * np.asarray(relative_speed)

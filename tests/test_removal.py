@@ -1,0 +1,29 @@
+"""The removal laws: the paper's Runnels–Eyman law and the shear-power law."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cmpsim
+from cmpsim.removal import shear_power_removal_rate
+
+
+def test_shear_power_law_is_prestons_law_in_full_contact():
+    p, u, k_s, mu = 27.6e3, 0.63, 2.5e-13, 0.4
+    rr = shear_power_removal_rate(np.full(5, p), np.zeros(5), np.full(5, u), k_s, mu, 0.7)
+    np.testing.assert_allclose(rr, k_s * mu * p * u, rtol=1e-15)
+
+
+def test_shear_power_law_adds_the_weighted_fluid_shear_power():
+    rr = shear_power_removal_rate(0.0, (np.array([3.0]), np.array([4.0])), 2.0, 1e-12, 0.4, 0.5)
+    np.testing.assert_allclose(rr, 1e-12 * 0.5 * 5.0 * 2.0, rtol=1e-15)
+
+
+def test_wafer_mean_shear_power_rate_tends_to_preston_when_the_pad_carries_the_whole_load():
+    # at 1 rpm the slurry carries almost nothing: RR -> k_s mu P U over the wafer
+    r = cmpsim.solve(removal_law="shear_power", rotation_speed="1 rpm", grid="coarse", relative=False)
+    c = r.config
+    preston = c.shear_power_coefficient * c.friction_coefficient * c.applied_pressure * r.sliding_speed_m_s
+    assert r.contact_load_fraction > 0.999
+    assert r.removal_rate == pytest.approx(preston * r.contact_load_fraction, rel=1e-9)  # uniform |du|: exact
