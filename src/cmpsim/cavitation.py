@@ -192,9 +192,13 @@ class CavitationSystem:
         Frozen cavitated set (flattened or shaped like the grid).
     solver : callable, optional
         ``solver(A)`` returning an object with ``.solve(b)``.
+    guess : bool array, optional
+        Starting cavitated set of the active-set iteration (e.g. that of a neighbouring film);
+        the solution does not depend on it, the cost does. If the iteration does not settle
+        from it, it is restarted from the full-film solution.
     """
 
-    def __init__(self, grid: PolarGrid, coeffs: FaceCoefficients, p_cav: float, cavitated=None, solver=None):
+    def __init__(self, grid: PolarGrid, coeffs: FaceCoefficients, p_cav: float, cavitated=None, solver=None, guess=None):
         self.grid = grid
         self.coeffs = coeffs
         self.p_cav = float(p_cav)
@@ -206,9 +210,13 @@ class CavitationSystem:
         self.iterations = 0
         self._w = None
         if cavitated is None:
-            p, r, cav, factor, it = solve_complementarity(
-                self.diffusion, self.couette, self.full_film_rhs, self.p_cav, solver=self._solver
-            )
+            args = (self.diffusion, self.couette, self.full_film_rhs, self.p_cav)
+            try:
+                p, r, cav, factor, it = solve_complementarity(*args, cavitated=guess, solver=self._solver)
+            except CavitationError:
+                if guess is None:
+                    raise
+                p, r, cav, factor, it = solve_complementarity(*args, solver=self._solver)
             self._factor, self.iterations = factor, it
             self._w = np.where(cav, r, p)
         else:

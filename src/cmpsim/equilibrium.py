@@ -167,6 +167,7 @@ class WaferProblem:
         self.newtonian = lubrication.slurry_model == "newtonian"
         self.cavitation = cavitation
         self.p_cav = None if cavitation == "none" else float(cavitation_pressure)
+        self._last_cavitated = None
         self.sigma = lubrication.roughness.sigma
         R = grid.radius
         self.xc, self.yc = grid.centres
@@ -237,8 +238,12 @@ class WaferProblem:
     def _system(self, coeffs, frozen: PressureState | None = None):
         """The discrete slurry problem of these face coefficients (JFO: on ``frozen``'s set if given)."""
         if self.cavitation == "jfo":
-            cav = None if frozen is None else frozen.system.cavitated
-            return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=cav)
+            if frozen is not None:
+                return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=frozen.system.cavitated)
+            # start the active-set iteration from the last solved set (the solution does not depend on it)
+            system = CavitationSystem(self.grid, coeffs, self.p_cav, guess=self._last_cavitated)
+            self._last_cavitated = system.cavitated if system.cavitated.any() else None
+            return system
         return ReynoldsSystem(self.grid, coeffs)
 
     def state(self, u) -> PressureState:
