@@ -229,3 +229,19 @@ def test_newton_jacobian_on_the_frozen_cavitated_set_matches_a_central_differenc
             assert np.array_equal(plus.cavitated, st.cavitated) and np.array_equal(minus.cavitated, st.cavitated)
         central = (plus.residual - minus.residual) / (2 * du[k])
         assert np.abs(J[:, k] - central).max() < 1e-5 * np.abs(central).max(), (k, J[:, k], central)
+
+
+def test_newtonian_hydroplaning_equilibrium_is_found_from_an_attack_angle_scan():
+    """IC1000-like pad (sigma 5 um, R 7 um, H 50 MPa, E 0.5 GPa): the wafer hydroplanes. With full
+    Sommerfeld the zero-tilt film carries no net fluid load, Newton from the contact-only start
+    stalls near a sucked-down film, and the solver restarts from an attack-angle scan; it finds
+    the root that Gumbel cavitation (no cell below p_cav there) reaches directly."""
+    pad = dict(pad_modulus="0.5 GPa", pad_hardness="50 MPa", asperity_radius="7 um", pad_roughness="5 um",
+               reference_roughness="5 um", asperity_density=1e8, grid="12x32", max_iterations=12)
+    full = cmpsim.solve(slurry_model="newtonian", relative=False, **pad)
+    gumbel = cmpsim.solve(slurry_model="newtonian", cavitation="gumbel", relative=False, **pad)
+    assert full.converged and abs(full.load_residual) < 1e-9
+    assert full.fluid_load_fraction == pytest.approx(1.0, abs=1e-9)
+    assert not gumbel.solution.state.cavitated.any()
+    assert full.attack_angle_rad == pytest.approx(gumbel.attack_angle_rad, rel=1e-6)
+    assert full.film_thickness_center_m == pytest.approx(gumbel.film_thickness_center_m, rel=1e-8)

@@ -7,7 +7,7 @@ slurry and cavitation", gives the equations and the reasoning.
 - ``"none"`` (full Sommerfeld): A p = b, the pressure may take any sign.
 - ``"gumbel"``: the same p, but the pressure acting on the wafer is max(p, p_cav). Simple, and
   it violates mass conservation where p < p_cav.
-- ``"jfo"`` (Jakobsson–Floberg–Olsson; Elrod, J. Tribol. 103, 350 (1981); in the
+- ``"jfo"`` (Jakobsson–Floberg–Olsson; Elrod, J. Lubr. Technol. 103, 350 (1981); in the
   linear-complementarity form of Giacopini, Fowell, Dini & Strozzi, J. Tribol. 132, 041702
   (2010)): unknowns p and the fill fraction theta (share of the gap filled by liquid) with
 

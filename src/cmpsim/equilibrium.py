@@ -466,6 +466,59 @@ def solve_equilibrium(
         # first balance the load by bracketing h0, then let Newton do the rest
         u = balance_load(problem, u)
         st = problem.state(u)
+    try:
+        u, st, it, history = _newton(problem, u, st, tol, max_iter, max_step)
+    except EquilibriumError as first:
+        if not problem.newtonian:
+            raise
+        # A Newtonian film at zero tilt carries almost no net load (its pressure is nearly odd
+        # in x), so the contact-only start can sit in a basin of the merit function far from a
+        # lift-carried equilibrium. Restart once from the best point of an attack-angle scan.
+        try:
+            u = _tilt_scan_start(problem, u)
+            st = problem.state(u)
+            u, st, it, history = _newton(problem, u, st, tol, max_iter, max_step)
+        except (EquilibriumError, ValueError) as second:
+            raise EquilibriumError(f"{first}; a restart from an attack-angle scan failed too: {second}") from first
+    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+
+
+def _tilt_scan_start(problem: WaferProblem, u, n: int = 9) -> np.ndarray:
+    """Balance the load at ``n`` attack angles within the admissible range and return the point
+    where the moment about y changes sign (interpolated, in the bracket closest to balance;
+    else where it is smallest), cross tilt 0.
+
+    The range is +-0.9 (cutoff sigma + dome height) / R_w: tilting further would lower the
+    trailing edge through the layer where the pad carries load.
+    """
+    cutoff = problem.pad.height_cutoff if problem.pad is not None and np.isfinite(problem.pad.height_cutoff) else 3.0
+    layer = cutoff * problem.sigma + problem.dome_height
+    limit = 0.9 * layer / problem.grid.radius
+    thetas = np.linspace(-limit, limit, n)
+    points = []
+    for th in thetas:
+        try:
+            # bracket from above the contact layer: the thickest film that balances the load,
+            # not a thin one where the sub-ambient pressure of a full-Sommerfeld film sucks
+            # the wafer onto the pad
+            v = balance_load(problem, [u[0] + layer, th, 0.0])
+            points.append((th, v, problem.state(v).residual[1]))
+        except (EquilibriumError, ValueError):
+            continue
+    if not points:
+        raise EquilibriumError("no attack angle of the scan admits a load balance")
+    # of the sign changes, the one whose ends are closest to balance (the moment is steep and
+    # erratic around thin, sucked-down films)
+    brackets = [(max(abs(ma), abs(mb)), va, vb, ma, mb) for (_, va, ma), (_, vb, mb) in zip(points, points[1:]) if ma * mb <= 0 and ma != mb]
+    if brackets:
+        _, va, vb, ma, mb = min(brackets, key=lambda q: q[0])
+        w = ma / (ma - mb)
+        return (1 - w) * va + w * vb
+    return min(points, key=lambda q: abs(q[2]))[1]
+
+
+def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: int, max_step: float):
+    """The safeguarded Newton loop of :func:`solve_equilibrium`: (u, state, steps, history)."""
     history = [(u.copy(), st.residual.copy())]
     it = 0
     while _merit(st.residual) >= tol:
@@ -500,7 +553,7 @@ def solve_equilibrium(
             )
         u, st = trial, new
         history.append((u.copy(), st.residual.copy()))
-    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+    return u, st, it, history
 
 
 @dataclass

@@ -8,8 +8,8 @@ zero) pressure at both ends x = 0 and x = L:
     d/dx( h^3/(12 eta) dp/dx ) = (U/2) dh/dx,    h(x) = h_1 + (h_2 - h_1) x / L.
 
 - :func:`plane_slider_pressure`, :func:`plane_slider_load`: the classical converging slider
-  (Hamrock, Schmid & Jacobson, *Fundamentals of Fluid Film Lubrication*, 2nd ed., Marcel
-  Dekker 2004, ch. 8 "Plane slider bearings": P = 6 m X (1 - X) / ((2 + m)(1 + m - m X)^2),
+  (Hamrock, *Fundamentals of Fluid Film Lubrication*, McGraw-Hill 1994, ch. 8, the
+  fixed-incline slider: P = 6 m X (1 - X) / ((2 + m)(1 + m - m X)^2),
   W = 6/m^2 [ln(1 + m) - 2m/(2 + m)], m = h_i/h_o - 1).
 - :func:`linear_film_pressure`: the same in the general form of any slope sign (full
   Sommerfeld); :func:`gumbel_load`: its Gumbel (half-Sommerfeld for p_cav = 0) load.
