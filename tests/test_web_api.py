@@ -352,8 +352,8 @@ def test_the_page_and_its_scripts_are_served_with_their_types(client):
         r = client.get(path)
         assert r.status_code == 200 and r.headers["content-type"].startswith(kind), path
         assert r.headers["x-content-type-options"] == "nosniff"
-    html = client.get("/").text
-    assert "/static/plotly.min.js" in html and "http://" not in html and "https://" not in html
+    page = client.get("/").text + client.get("/static/app.js").text
+    assert "/static/plotly.min.js" in page and "http://" not in page and "https://" not in page
 
 
 TRAVERSALS = [
@@ -440,3 +440,24 @@ def test_serve_says_where_to_point_the_browser_and_warns_off_loopback(monkeypatc
 
     res = CliRunner().invoke(main, ["serve", "--max-grid", "huge"])
     assert res.exit_code == 2 and "--max-grid" in res.stderr
+
+
+# ---------------------------------------------------------------------------- the documentation
+
+
+def test_the_docs_page_states_the_limits_and_messages_the_code_has():
+    from cmpsim.cli import serve_command
+    from cmpsim.web.limits import grid_cells
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "web.md").read_text(encoding="utf-8")
+    defaults = {p.opts[0]: p.default for p in serve_command.params if p.opts[0].startswith("--max-")}
+    lim = Limits()
+    assert defaults == {"--max-grid": lim.max_grid, "--max-sweep-points": lim.max_sweep_points, "--max-jobs": lim.max_jobs, "--max-body": lim.max_body_bytes}
+    for option, default in defaults.items():
+        assert f"| `{option}` | `{default}` |" in text, option
+    n_r, n_t, cells = grid_cells(lim.max_grid)
+    assert f"`{lim.max_grid}` = {n_r}x{n_t} = {cells} cells" in text
+    for value in ("-3 psi", "3 kg"):
+        with pytest.raises(ValueError) as info:
+            Config.default().replace(applied_pressure=value)
+        assert f"*{info.value}*" in text, value

@@ -40,6 +40,23 @@ function errorText(r) {
   return text;
 }
 
+// plotly.js (from the installed plotly wheel, served by cmpsim) is loaded at the first plot:
+// the form is usable before its 4.8 MB are parsed.
+let plotlyLoading = null;
+function ensurePlotly() {
+  if (window.Plotly) return Promise.resolve(window.Plotly);
+  if (!plotlyLoading) {
+    plotlyLoading = new Promise((resolve, reject) => {
+      const s = document.createElement("script");
+      s.src = "/static/plotly.min.js";
+      s.onload = () => resolve(window.Plotly);
+      s.onerror = () => { plotlyLoading = null; reject(new Error("cannot load /static/plotly.min.js")); };
+      document.head.append(s);
+    });
+  }
+  return plotlyLoading;
+}
+
 // ------------------------------------------------------------------ values
 function requestValue(p, text) {
   const t = String(text).trim();
@@ -196,8 +213,14 @@ async function solve() {
   state.body = body;
   $("status").textContent = `Solved in ${((performance.now() - t0) / 1000).toFixed(1)} s`;
   renderResults(data);
-  renderPlots(data, fields);
   setDownloads(data);
+  try {
+    await ensurePlotly();
+  } catch (err) {
+    showMessage("message", err.message);
+    return;
+  }
+  renderPlots(data, fields);
 }
 
 function valuesOf(data) {
@@ -397,6 +420,7 @@ function startSweep(job) {
   $("sweep-downloads").hidden = true;
   $("sweep-failures").textContent = "";
   $("sweep-status").textContent = `0 of ${job.total} points`;
+  delete $("sweep-status").dataset.state;
   for (const w of job.warnings || []) showMessage("sweep-message", `warning: ${w}; those points will be recorded as invalid`);
   if (state.source) state.source.close();
   const source = new EventSource(`/api/sweeps/${job.id}/events`);
@@ -407,7 +431,7 @@ function startSweep(job) {
     bar.value = point.done;
     $("sweep-status").textContent = `${point.done} of ${point.total} points`;
     if (point.status !== "ok") addFailure(point);
-    drawSweep();
+    ensurePlotly().then(drawSweep, (err) => showMessage("sweep-message", err.message));
   });
   source.addEventListener("end", (e) => {
     source.close();
@@ -439,7 +463,7 @@ function endSweep(st) {
   nc.hidden = st.status !== "done";
   nc.href = `/api/sweeps/${sweep.id}/result`;
   nc.download = `cmpsim-sweep-${sweep.id}.nc`;
-  drawSweep();
+  ensurePlotly().then(drawSweep, (err) => showMessage("sweep-message", err.message));
 }
 
 function addFailure(point) {
@@ -539,7 +563,7 @@ async function main() {
   $("reset").addEventListener("click", resetForm);
   $("run-sweep").addEventListener("click", runSweep);
   $("cancel-sweep").addEventListener("click", cancelSweep);
-  $("sweep-output").addEventListener("change", drawSweep);
+  $("sweep-output").addEventListener("change", () => ensurePlotly().then(drawSweep));
   $("download-netcdf").addEventListener("click", downloadNetcdf);
   for (const id of ["solve", "reset", "run-sweep"]) $(id).disabled = false;
   document.body.dataset.ready = "true";
