@@ -369,7 +369,7 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
             "limits": limits.as_dict(),
             "jobs_running": slots.used,
             "token_required": bool(token),
-            "sweep_cluster": f"Dask scheduler at {scheduler}" if scheduler else f"local Dask cluster ({workers or 'one worker per core'})",
+            "sweep_cluster": f"Dask scheduler at {scheduler}" if scheduler else ("local Dask cluster, one worker per core" if workers is None else f"local Dask cluster, {workers} worker(s)"),
         }
 
     @app.get("/api/params", summary="Every input: name, section, default, display unit, valid range, source, choices")

@@ -351,7 +351,40 @@ function saveBlob(blob, name) {
 // ------------------------------------------------------------------ sweeps
 function numericParams() { return state.params.filter((p) => p.kind === "number"); }
 
+// One row per swept input: #sweep-param-N, #sweep-start-N, #sweep-stop-N, #sweep-num-N.
+function axisRow(n, title, points) {
+  const row = document.createElement("div");
+  row.className = "axis";
+  row.dataset.axis = String(n);
+  const labelled = (text, el) => {
+    const label = document.createElement("label");
+    label.append(`${text} `, el);
+    return label;
+  };
+  const control = (tag, id, attrs) => {
+    const el = document.createElement(tag);
+    el.id = id;
+    el.name = id.replaceAll("-", "_");
+    Object.assign(el, attrs || {});
+    return el;
+  };
+  const unit = control("span", `sweep-unit-${n}`, { className: "unit" });
+  const error = document.createElement("span");
+  error.className = "error";
+  error.dataset.errorFor = `sweep-${n}`;
+  row.append(
+    labelled(title, control("select", `sweep-param-${n}`)),
+    labelled("from", control("input", `sweep-start-${n}`, { size: 9 })),
+    labelled("to", control("input", `sweep-stop-${n}`, { size: 9 })),
+    unit,
+    labelled("points", control("input", `sweep-num-${n}`, { type: "number", min: 1, value: String(points) })),
+    error,
+  );
+  return row;
+}
+
 function buildSweepPanel() {
+  $("sweep-axes").append(axisRow(1, "Input", 5), axisRow(2, "Second input", 4));
   const s1 = $("sweep-param-1");
   const s2 = $("sweep-param-2");
   s2.append(new Option("(none)", ""));
