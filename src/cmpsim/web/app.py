@@ -303,13 +303,11 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
         app.add_middleware(TokenGuard, token=token)
 
     # ------------------------------------------------------------------ errors
-    @app.exception_handler(InputError)
-    async def _input_error(request, exc: InputError):
+    async def _unprocessable(request, exc: InputError | LimitError):
         return _error(422, str(exc), exc.parameter)
 
-    @app.exception_handler(LimitError)
-    async def _limit_error(request, exc: LimitError):
-        return _error(422, str(exc), exc.parameter)
+    app.add_exception_handler(InputError, _unprocessable)
+    app.add_exception_handler(LimitError, _unprocessable)
 
     @app.exception_handler(Busy)
     async def _busy(request, exc: Busy):
