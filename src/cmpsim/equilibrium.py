@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
+from . import compliance
 from .contact import PadSurface, asperity_contact, contact_table
 from .geometry import film_thickness
 from .grid import PolarGrid
@@ -53,8 +54,11 @@ class PressureState:
     area_elastoplastic: np.ndarray
     area_plastic: np.ndarray
     residual: np.ndarray  # (R_F, R_y, R_x)
-    system: ReynoldsSystem
+    system: ReynoldsSystem | None  # None on a compliant pad (see ``coupling``)
     floored_fraction: float
+    # ---- pad compliance (compliance.py); None on a rigid pad
+    deflection: np.ndarray | None = None  # pad deflection w at cell centres, m
+    coupling: object = None  # (CoupledLinearisation, Reynolds residual) for the Jacobian
 
     @property
     def p_total(self) -> np.ndarray:
@@ -95,6 +99,8 @@ class WaferProblem:
     pad : PadSurface or None
         Asperity description; ``None`` only for the hydrodynamic variant.
     variant : {"lep", "elastic", "hydrodynamic"}
+    foundation : compliance.WinklerFoundation or None
+        Elastic pad stack under the asperity layer; ``None`` = rigid pad (the paper).
     """
 
     def __init__(
@@ -107,6 +113,7 @@ class WaferProblem:
         pad: PadSurface | None,
         variant: str = "lep",
         separation_offset: float = 0.0,
+        foundation: compliance.WinklerFoundation | None = None,
     ):
         if variant not in MODEL_VARIANTS:
             raise ValueError(f"model must be one of {MODEL_VARIANTS}; got {variant!r}")
@@ -124,6 +131,9 @@ class WaferProblem:
         self.pad = pad
         self.variant = variant
         self.separation_offset = separation_offset
+        self.foundation = foundation
+        if foundation is not None and variant == "hydrodynamic":
+            raise ValueError("a compliant pad (pad_compliance = 'winkler') needs a model with contact ('lep' or 'elastic')")
         self.sigma = lubrication.roughness.sigma
         R = grid.radius
         self.xc, self.yc = grid.centres
@@ -142,6 +152,8 @@ class WaferProblem:
     # ------------------------------------------------------------------ geometry
     def film(self, u, x, y) -> np.ndarray:
         """Film thickness at points (x, y) for position u = (h0, theta, beta), m."""
+        if self.foundation is not None:  # rigid film + pad deflection (compliance.py)
+            return compliance.deformed_film(self, u, x, y)
         return film_thickness(x, y, u[0], u[1], self.dome_height, self.grid.radius, cross_tilt=u[2])
 
     def face_coefficients(self, u) -> FaceCoefficients:
@@ -177,6 +189,8 @@ class WaferProblem:
 
     def state(self, u) -> PressureState:
         """Solve the Reynolds equation and evaluate contact and residuals at position u."""
+        if self.foundation is not None:  # film and pad deflection solved together (compliance.py)
+            return compliance.coupled_state(self, u)
         u = np.asarray(u, dtype=float)
         h = self.film(u, self.xc, self.yc)
         coeffs = self.face_coefficients(u)
@@ -197,6 +211,8 @@ class WaferProblem:
 
     def jacobian(self, st: PressureState, rel_step: float = 1e-6) -> np.ndarray:
         """d(residual)/du at a solved state: 3 coefficient re-evaluations, 3 back-substitutions."""
+        if self.foundation is not None:  # includes the pad deflection (compliance.py)
+            return compliance.coupled_jacobian(self, st, rel_step)
         J = np.empty((3, 3))
         base = st.system.residual(st.phi)
         for k in range(3):
@@ -215,6 +231,8 @@ class WaferProblem:
     # ------------------------------------------------------------------ starts
     def contact_only_start(self) -> np.ndarray:
         """h0 at zero tilt for which the pad contact alone carries the applied load."""
+        if self.foundation is not None:  # with the pad deflection (compliance.py)
+            return compliance.compliant_contact_only_start(self)
         shape = self.film(np.zeros(3), self.xc, self.yc)  # h - h0 at u = 0
 
         def excess(h0):
