@@ -78,11 +78,13 @@ def test_the_default_stack_is_ic1000_on_suba_iv_and_subpad_zero_means_none():
     assert pad_foundation(Config.default()) is None
 
 
-def test_paper_preset_stays_rigid_and_hydrodynamic_refuses_a_compliant_pad():
+def test_paper_preset_stays_rigid_and_hydrodynamic_or_jfo_refuse_a_compliant_pad():
     assert PRESETS["paper"]["pad_compliance"] == "rigid"
     assert Config.paper().replace(pad_bulk_modulus="200 MPa").pad_compliance == "rigid"
     with pytest.raises(ValueError, match="pad_compliance"):
         Config.default().replace(model="hydrodynamic", **COMPLIANT)
+    with pytest.raises(ValueError, match="jfo"):
+        Config.default().replace(slurry_model="newtonian", cavitation="jfo", **COMPLIANT)
     with pytest.raises(ValueError, match="pad_poisson"):
         Config.default().replace(pad_poisson=0.5, **COMPLIANT)
     with pytest.raises(ValueError, match="subpad_modulus"):
@@ -151,7 +153,18 @@ def test_flat_wafer_under_uniform_speed_on_a_winkler_pad_has_uniform_pressure_an
     assert p.mean() == pytest.approx(r.config.applied_pressure, rel=1e-9)
 
 
-@pytest.mark.parametrize("overrides", [{}, {"applied_pressure": "2 psi"}, {"applied_pressure": "6 psi", "rotation_speed": "90 rpm"}, {"subpad_modulus": "0.5 MPa"}])
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {},
+        {"applied_pressure": "2 psi"},
+        {"applied_pressure": "6 psi", "rotation_speed": "90 rpm"},
+        {"subpad_modulus": "0.5 MPa"},
+        {"slurry_model": "newtonian"},
+        {"slurry_model": "newtonian", "cavitation": "gumbel", "cavitation_pressure": 0.0},
+    ],
+    ids=["base", "2psi", "6psi-90rpm", "soft-subpad", "newtonian", "newtonian-gumbel"],
+)
 def test_load_and_moment_balance_to_1e_9_with_compliance(overrides):
     r = cmpsim.solve(relative=False, **COMPLIANT, **overrides)
     st = r.solution.state

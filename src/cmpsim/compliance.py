@@ -228,7 +228,7 @@ class _Evaluation:
     rhs: np.ndarray
     R: np.ndarray  # Reynolds residual, flat
     G: np.ndarray  # k w - P, flat
-    p_abs: np.ndarray
+    p_abs: np.ndarray  # p_slurry of PressureState (granular: absolute; Newtonian: gauge acting)
     p_fluid: np.ndarray
     contact: tuple  # (p_c, a_el, a_ep, a_pl)
 
@@ -251,12 +251,29 @@ def _coefficients(problem, hr, ha) -> FaceCoefficients:
     return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
 
 
+def _slurry_pressure(problem, phi):
+    """(p_slurry, gauge pressure acting, its derivative in phi) of the unknown phi.
+
+    Granular: phi = ln(p/p0), p_slurry the absolute granular pressure. Newtonian: phi is the
+    gauge pressure p; with Gumbel cavitation the acting pressure is max(p, p_cav), whose
+    derivative is taken on the set where p > p_cav (semismooth Newton).
+    """
+    if not problem.newtonian:
+        p_abs = problem.p0 * np.exp(phi)
+        return p_abs, p_abs - problem.p0, p_abs
+    if problem.cavitation == "gumbel":
+        acting = phi > problem.p_cav
+        p = np.where(acting, phi, problem.p_cav)
+        return p, p, acting.astype(float)
+    return phi, phi, np.ones_like(phi)
+
+
 def _load(problem, phi, h):
-    """(p_abs, p_fluid, contact) at a film h and phi: the pressure the pad carries is their sum."""
+    """(p_slurry, p_fluid, contact) at a film h and phi: the pressure the pad carries is p_fluid + p_c."""
     contact = problem.contact(h)
     ar = contact[1] + contact[2] + contact[3]
-    p_abs = problem.p0 * np.exp(phi)
-    return p_abs, (1.0 - ar) * (p_abs - problem.p0), contact
+    p_slurry, gauge, _ = _slurry_pressure(problem, phi)
+    return p_slurry, (1.0 - ar) * gauge, contact
 
 
 def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
@@ -325,7 +342,7 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
         s_ang[mask.ravel()] = r[mask.ravel()]
     R_w = (ops.div_radial @ sp.diags(s_rad) @ ops.interp_radial + ops.div_angular @ sp.diags(s_ang) @ ops.interp_angular).tocsr()
     ar = ev.contact[1] + ev.contact[2] + ev.contact[3]
-    P_phi = ((1.0 - ar) * ev.p_abs).ravel()
+    P_phi = ((1.0 - ar) * _slurry_pressure(problem, ev.phi)[2]).ravel()
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
     K = k - P_h
     S = (ev.matrix + R_w @ sp.diags(P_phi / K)).tocsr()
@@ -414,9 +431,9 @@ def coupled_state(problem, u):
         phi = phi + scale * dphi
         w = w + scale * dw
         lin.drift += scale * size
-        if not np.all(np.isfinite(phi)) or phi.max() > 300.0:
+        if not np.all(np.isfinite(phi)) or (not problem.newtonian and phi.max() > 300.0):
             raise ValueError(
-                f"the slurry pressure diverges (ln(p/p0) up to {np.nanmax(phi):.3g}) on the compliant pad at a minimum "
+                f"the slurry pressure diverges (unknown up to {np.nanmax(phi):.3g}) on the compliant pad at a minimum "
                 f"film of {h.min() / sigma:.3g} sigma"
             )
         ev = _evaluate(problem, u, phi, w, ops)
@@ -430,9 +447,10 @@ def coupled_state(problem, u):
     mem.lin = lin
     pc, ae, aep, ap = ev.contact
     floored = ev.coeffs.floored / max(ev.coeffs.n_faces, 1)
+    cavitated = (phi <= problem.p_cav) if problem.cavitation == "gumbel" else None
     return PressureState(
         u, ev.h, phi, ev.p_abs, ev.p_fluid, pc, ae, aep, ap, res, None, floored,
-        deflection=w, coupling=(lin, ev),
+        cavitated=cavitated, deflection=w, coupling=(lin, ev),
     )
 
 
