@@ -125,6 +125,13 @@ PARAMETERS: dict[str, Param] = {
         _P("wafer_roughness", "pad", "sigma_2", "m", "um", 0.0, "Std of wafer surface heights", "Paper: wafer smooth (sigma_2 << sigma_1)", 0.0, None, False),
         _P("peklenik_number", "pad", "gamma", "", "", 1.0, "Peklenik number of the pad roughness (1 = isotropic)", "Paper section 3.1", 0.0),
         _P("roughness_angle", "pad", "theta_1", "rad", "deg", 0.0, "Orientation of the pad roughness from the sliding direction", "Paper (isotropic: irrelevant)"),
+        # pad stack under the asperity layer (pad compliance; docs/model.md, "Pad compliance")
+        _P("pad_compliance", "pad", "-", "choice", "", "rigid", "Bulk deformation of the pad: none (the paper), or a local elastic (Winkler) foundation of the pad and subpad layers in series", "docs/model.md ('Pad compliance'); 'rigid' is the paper's model", choices=("rigid", "winkler")),
+        _P("pad_thickness", "pad", "t_1", "m", "mm", 1.27e-3, "Thickness of the top pad (bulk under the asperities)", "IC1000: 50 mil = 1.27 mm (Pureon IC1000/IC1010 datasheet 2024, read in a transcription); see docs/model.md", 0.0),
+        _P("pad_bulk_modulus", "pad", "E_b", "Pa", "MPa", 300e6, "Young's modulus of the top pad's bulk (porous polyurethane)", "Wet IC1000: 0.3-0.5 GPa (Eusner et al., JES 156 H528, 2009; Saka et al., CIRP Ann. 57, 341, 2008), lower end; see docs/model.md", 0.0),
+        _P("subpad_thickness", "pad", "t_2", "m", "mm", 1.27e-3, "Thickness of the subpad (0 = no subpad)", "Suba IV sub-pad, 50 mil as commonly stacked under IC1000 (assumed: no datasheet found); see docs/model.md", 0.0, None, False),
+        _P("subpad_modulus", "pad", "E_2s", "Pa", "MPa", 2.3e6, "Young's modulus of the subpad", "Order of magnitude of a Suba IV-class felt: 2.29 MPa soft-pad layer of Wang et al., JES 144, 1121 (1997), as used by Lo & Lin, J. Mater. Process. Technol. 168, 250 (2005) (second-hand); see docs/model.md", 0.0),
+        _P("subpad_poisson", "pad", "nu_2s", "", "", 0.1, "Poisson ratio of the subpad", "Wang et al. (1997) via Lo & Lin (2005) (second-hand): 0.1 for the soft pad layer", 0.0, 0.5, False, True),
         _P("friction_coefficient", "pad", "mu", "", "", 0.4, "Coulomb friction of pad summits on the wafer", "Lai, PhD thesis MIT (2001): 0.40-0.49 in contact mode", 0.0, None, False),
         # ---------------------------------------------------------------- numerics
         _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
@@ -145,6 +152,7 @@ PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
     "paper": {
         "removal_law": "paper",
+        "pad_compliance": "rigid",
     },
 }
 
@@ -170,6 +178,21 @@ MAX_PARTICLE_ROUGHNESS_RATIO = 0.1
 
 def _check_consistency(c: "Config") -> None:
     """Refuse combinations of inputs that make the model meaningless, naming the parameters."""
+    if c.pad.pad_compliance != "rigid" and c.numerics.model == "hydrodynamic":
+        raise ValueError(
+            f"pad_compliance = {c.pad.pad_compliance!r} needs a model with pad contact: model must be 'lep' or 'elastic' "
+            "(got 'hydrodynamic'); use pad_compliance = 'rigid' for the pure hydrodynamic variant"
+        )
+    if c.pad.pad_compliance != "rigid" and c.cavitation == "jfo":
+        raise ValueError(
+            "cavitation = 'jfo' is not available with pad_compliance = 'winkler' (the mass-conserving active set is not "
+            "coupled to the pad deflection): valid values 'none' or 'gumbel', or use pad_compliance = 'rigid'"
+        )
+    if c.pad.pad_compliance != "rigid" and c.pad.pad_poisson >= 0.5:
+        raise ValueError(
+            f"pad_poisson = {c.pad.pad_poisson:g} makes the compliant pad infinitely stiff (an incompressible bonded layer): "
+            "valid range [0, 0.5) with pad_compliance = 'winkler'"
+        )
     limit = MAX_PARTICLE_ROUGHNESS_RATIO * c.pad.pad_roughness
     if c.slurry.particle_diameter >= limit:
         raise ValueError(

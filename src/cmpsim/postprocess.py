@@ -105,6 +105,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "normal_stress": sigma_n,
         "shear_stress": tau,
         "removal_rate": rr,
+        # bulk deflection of the pad stack (0 on a rigid pad; compliance.py)
+        "pad_deflection": st.deflection if st.deflection is not None else np.zeros_like(st.h),
     }
     if st.fill_fraction is not None:
         polar["fill_fraction"] = st.fill_fraction
