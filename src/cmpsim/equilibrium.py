@@ -34,7 +34,16 @@ from .cavitation import CAVITATION_MODELS, CavitationSystem
 from .contact import PadSurface, asperity_contact, contact_table
 from .geometry import film_thickness
 from .grid import PolarGrid
-from .reynolds import FaceCoefficients, LubricationParameters, ReynoldsSystem, lubrication_coefficients
+from .reynolds import (
+    FaceCoefficients,
+    LinearSolveStats,
+    LubricationParameters,
+    ReynoldsSystem,
+    assemble_operator,
+    factorize,
+    flux_divergence,
+    lubrication_coefficients,
+)
 
 __all__ = [
     "WaferProblem",
@@ -138,6 +147,14 @@ class WaferProblem:
         p_cav, gauge, Pa, in [-101325, 0]; required unless ``cavitation == "none"``.
     foundation : compliance.WinklerFoundation or None
         Elastic pad stack under the asperity layer; ``None`` = rigid pad (the paper).
+    solver : callable, optional
+        ``solver(A)`` returning an object with ``.solve(b)`` (a sparse factorisation); default
+        :func:`cmpsim.reynolds.factorize` (SuperLU). Passed to every pressure solve.
+
+    Cost: the factorisation of the last matrix factorised is kept and later trial positions
+    are solved by iterative refinement against it (:func:`cmpsim.reynolds.refine`), with a
+    new factorisation only when the refinement stalls. ``factorizations`` counts the calls of
+    ``solver`` (real factorisations), ``back_substitutions`` the solves with them.
     """
 
     def __init__(
@@ -153,7 +170,13 @@ class WaferProblem:
         cavitation: str = "none",
         cavitation_pressure: float | None = None,
         foundation: compliance.WinklerFoundation | None = None,
+        solver=None,
     ):
+        self._init_args = dict(
+            dome_height=dome_height, applied_pressure=applied_pressure, ambient_pressure=ambient_pressure,
+            lubrication=lubrication, pad=pad, variant=variant, separation_offset=separation_offset,
+            cavitation=cavitation, cavitation_pressure=cavitation_pressure, foundation=foundation,
+        )
         if variant not in MODEL_VARIANTS:
             raise ValueError(f"model must be one of {MODEL_VARIANTS}; got {variant!r}")
         _check_cavitation(lubrication.slurry_model, cavitation, cavitation_pressure)
@@ -188,12 +211,45 @@ class WaferProblem:
         self.load_scale = applied_pressure * np.pi * R * R
         # scaling of the unknowns: h0 in sigma, tilts in sigma / R_w
         self.u_scale = np.array([self.sigma, self.sigma / R, self.sigma / R])
-        self.factorizations = 0
-        self.back_substitutions = 0
+        self.solver = solver or factorize
+        self.linear = LinearSolveStats()
+        self._reference = None  # the last factorisation: later positions refine against it
+        # all faces stacked (radial, angular) for one coefficient evaluation; kinematics cached
+        self._xf = np.stack([self.xr, self.xa])
+        self._yf = np.stack([self.yr, self.ya])
+        self._vf = lubrication.kinematics.mean_and_relative(self._xf, self._yf)
         # contact depends on the separation alone: tabulate it once (error < 1e-8, see ContactTable)
         self._contact_table = None
         if variant != "hydrodynamic" and np.isfinite(pad.height_cutoff):
             self._contact_table = contact_table(pad, variant)
+
+    @property
+    def factorizations(self) -> int:
+        """Sparse factorisations so far (calls of ``solver``)."""
+        return self.linear.factorizations
+
+    @factorizations.setter
+    def factorizations(self, value: int) -> None:
+        self.linear.factorizations = value
+
+    @property
+    def back_substitutions(self) -> int:
+        """Solves with a factorisation so far (including refinement steps)."""
+        return self.linear.back_substitutions
+
+    @back_substitutions.setter
+    def back_substitutions(self, value: int) -> None:
+        self.linear.back_substitutions = value
+
+    def _counting_solver(self, A):
+        self.linear.factorizations += 1
+        return self.solver(A)
+
+    def on_grid(self, grid: PolarGrid) -> "WaferProblem":
+        """The same operating point on another grid (for coarse-grid warm starts)."""
+        other = WaferProblem(grid, solver=self.solver, **self._init_args)
+        other._contact_table = self._contact_table
+        return other
 
     # ------------------------------------------------------------------ geometry
     def film(self, u, x, y) -> np.ndarray:
@@ -204,6 +260,10 @@ class WaferProblem:
 
     def face_coefficients(self, u) -> FaceCoefficients:
         """Reynolds coefficients on all faces at position u."""
+        if self.foundation is None:  # one evaluation on both face sets
+            c = lubrication_coefficients(self.film(u, self._xf, self._yf), self._xf, self._yf, self.lub, self._vf)
+            floored = int(np.count_nonzero(c[5]))
+            return FaceCoefficients(tuple(a[0] for a in c[:5]), tuple(a[1] for a in c[:5]), floored, c[5].size)
         rad = lubrication_coefficients(self.film(u, self.xr, self.yr), self.xr, self.yr, self.lub)
         ang = lubrication_coefficients(self.film(u, self.xa, self.ya), self.xa, self.ya, self.lub)
         floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
@@ -252,13 +312,14 @@ class WaferProblem:
     def _system(self, coeffs, frozen: PressureState | None = None):
         """The discrete slurry problem of these face coefficients (JFO: on ``frozen``'s set if given)."""
         if self.cavitation == "jfo":
+            solver = self._counting_solver
             if frozen is not None:
-                return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=frozen.system.cavitated)
+                return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=frozen.system.cavitated, solver=solver)
             # start the active-set iteration from the last solved set (the solution does not depend on it)
-            system = CavitationSystem(self.grid, coeffs, self.p_cav, guess=self._last_cavitated)
+            system = CavitationSystem(self.grid, coeffs, self.p_cav, guess=self._last_cavitated, solver=solver)
             self._last_cavitated = system.cavitated if system.cavitated.any() else None
             return system
-        return ReynoldsSystem(self.grid, coeffs)
+        return ReynoldsSystem(self.grid, coeffs, solver=self.solver, reference=self._reference, stats=self.linear)
 
     def state(self, u) -> PressureState:
         """Solve the Reynolds equation and evaluate contact and residuals at position u."""
@@ -269,7 +330,8 @@ class WaferProblem:
         coeffs = self.face_coefficients(u)
         system = self._system(coeffs)
         phi = system.solve()
-        self.factorizations += getattr(system, "iterations", 1)
+        if isinstance(system, ReynoldsSystem) and system.own_factor is not None:
+            self._reference = system.own_factor  # later positions refine against it
         if self.newtonian:
             if not np.all(np.isfinite(phi)):
                 raise ValueError(
@@ -297,6 +359,8 @@ class WaferProblem:
         """
         if self.foundation is not None:  # includes the pad deflection (compliance.py)
             return compliance.coupled_jacobian(self, st, rel_step)
+        if isinstance(st.system, ReynoldsSystem):
+            return self._film_jacobian(st, rel_step)
         J = np.empty((3, 3))
         base = st.system.residual(st.phi)
         acting = None if st.cavitated is None else ~st.cavitated
@@ -309,6 +373,37 @@ class WaferProblem:
             dr = pert.residual(st.phi) - base
             dphi = -st.system.factor.solve(dr).reshape(st.phi.shape)
             self.back_substitutions += 1
+            _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi, st.system, acting)
+            J[:, k] = (self._residual(p_fluid + pc) - st.residual) / du[k]
+        return J
+
+    def _film_jacobian(self, st: PressureState, rel_step: float) -> np.ndarray:
+        """:meth:`jacobian` for the linear (non-JFO) system on a rigid pad, in one extra
+        coefficient evaluation.
+
+        The face coefficients depend on the local film only (and on the fixed face position),
+        so dc/du_k = dc/dh dh/du_k: one forward difference in h gives dc/dh on every face, the
+        film changes dh/du_k follow from the geometry, and since A phi - b is linear in the
+        coefficients its change is A(dc_k) phi + div(dc_k). Then dphi = -A^-1 dr as before.
+        """
+        J = np.empty((3, 3))
+        hf = self.film(st.u, self._xf, self._yf)
+        eps = rel_step * self.sigma
+        c0 = st.system.coeffs
+        c1 = lubrication_coefficients(hf + eps, self._xf, self._yf, self.lub, self._vf)
+        dcdh = [(c1[m] - np.stack([c0.radial[m], c0.angular[m]])) / eps for m in range(5)]
+        acting = None if st.cavitated is None else ~st.cavitated
+        phi = st.phi.ravel()
+        for k in range(3):
+            du = np.zeros(3)
+            du[k] = rel_step * self.u_scale[k]
+            u = st.u + du
+            dh = self.film(u, self._xf, self._yf) - hf
+            dc = [d * dh for d in dcdh]
+            dcoeffs = FaceCoefficients(tuple(a[0] for a in dc), tuple(a[1] for a in dc))
+            dr = assemble_operator(self.grid, dcoeffs) @ phi + flux_divergence(self.grid, dcoeffs)
+            dphi = -st.system.solve_linear(dr).reshape(st.phi.shape)
+            h = self.film(u, self.xc, self.yc)
             _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi, st.system, acting)
             J[:, k] = (self._residual(p_fluid + pc) - st.residual) / du[k]
         return J
@@ -449,6 +544,7 @@ def solve_equilibrium(
     tol: float = 1e-9,
     max_iter: int = 40,
     max_step: float = 0.5,
+    warm_start: bool | None = None,
 ) -> EquilibriumSolution:
     """Newton iteration on (h0, theta, beta) with trust region and backtracking.
 
@@ -465,12 +561,21 @@ def solve_equilibrium(
     max_step : float
         Trust region: no step changes h0, or the film at the wafer edge through a tilt, by
         more than ``max_step`` sigma.
+    warm_start : bool, optional
+        Without ``start``, first solve the same problem on coarse grids (8x24, then 24x64)
+        and start from their equilibrium: the cold-start search (bracket, trust-region-limited
+        steps) then runs where each solve is cheap. Default (None): for the hydrodynamic
+        variant and for grids finer than 48x128 on a rigid pad without JFO cavitation. The
+        converged position is the one of this grid (to ``tol``); the coarse factorisations
+        are counted in ``factorizations``.
 
     Raises
     ------
     EquilibriumError
         If the film would have to touch the pad, or Newton cannot reduce the residual.
     """
+    if start is None and (_use_warm_start(problem) if warm_start is None else warm_start):
+        start = _coarse_start(problem, max_iter, max_step)
     if start is None:
         try:
             start = problem.fluid_start() if problem.variant == "hydrodynamic" else problem.contact_only_start()
@@ -501,6 +606,40 @@ def solve_equilibrium(
         except (EquilibriumError, ValueError) as second:
             raise EquilibriumError(f"{first}; a restart from an attack-angle scan failed too: {second}") from first
     return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+
+
+#: Coarse grids of the warm start, coarsest first.
+WARM_START_GRIDS = ((8, 24), (24, 64))
+#: Default warm start for contact models from this many cells on (48x128).
+_WARM_START_MIN_CELLS = 48 * 128
+
+
+def _use_warm_start(problem: WaferProblem) -> bool:
+    if problem.foundation is not None or problem.cavitation == "jfo":
+        return False
+    if problem.variant == "hydrodynamic":
+        return problem.grid.size > WARM_START_GRIDS[0][0] * WARM_START_GRIDS[0][1]
+    return problem.grid.size > _WARM_START_MIN_CELLS
+
+
+def _coarse_start(problem: WaferProblem, max_iter: int, max_step: float):
+    """Equilibrium position on the coarse grids of :data:`WARM_START_GRIDS` (None if it fails)."""
+    g = problem.grid
+    u = None
+    for n_r, n_t in WARM_START_GRIDS:
+        if n_r * n_t >= g.size or n_r > g.n_r or n_t > g.n_theta:
+            break
+        coarse = problem.on_grid(PolarGrid(g.radius, n_r, n_t))
+        try:
+            sol = solve_equilibrium(coarse, start=u, tol=1e-8, max_iter=max_iter, max_step=max_step, warm_start=False)
+        except (EquilibriumError, ValueError):
+            sol = None
+        problem.factorizations += coarse.factorizations
+        problem.back_substitutions += coarse.back_substitutions
+        if sol is None:
+            break
+        u = sol.state.u.copy()
+    return u
 
 
 def _tilt_scan_start(problem: WaferProblem, u, n: int = 9) -> np.ndarray:
