@@ -24,6 +24,7 @@ bracket of the fluid-only load).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -443,6 +444,8 @@ class WaferProblem:
                 vals.append((h0, self.state([h0, 0.0, 0.0]).residual[0]))
             except ValueError:  # diverging pressure at a thin film: overloaded
                 vals.append((h0, np.inf))
+            if len(vals) > 1 and (vals[-2][1] > 0 >= vals[-1][1] or vals[-2][1] < 0 <= vals[-1][1]):
+                break  # the first sign change is the bracket taken below: no need to probe further
         for (a, fa), (b, fb) in zip(vals, vals[1:]):
             if fa > 0 >= fb or fa < 0 <= fb:
                 if not np.isfinite(fa):
@@ -501,11 +504,16 @@ def balance_load(problem: WaferProblem, u, max_expansions: int = 40) -> np.ndarr
     u = np.asarray(u, dtype=float)
     sigma = problem.sigma
 
+    seen = {}  # Brent re-evaluates the bracket ends: solve each h0 once
+
     def load(h0):
-        try:
-            return problem.state([h0, u[1], u[2]]).residual[0]
-        except ValueError:
-            return np.inf
+        h0 = float(h0)
+        if h0 not in seen:
+            try:
+                seen[h0] = problem.state([h0, u[1], u[2]]).residual[0]
+            except ValueError:
+                seen[h0] = np.inf
+        return seen[h0]
 
     a, fa = u[0], load(u[0])
     step = 0.25 * sigma
@@ -574,6 +582,7 @@ def solve_equilibrium(
     EquilibriumError
         If the film would have to touch the pad, or Newton cannot reduce the residual.
     """
+    warm = start is not None
     if start is None and (_use_warm_start(problem) if warm_start is None else warm_start):
         start = _coarse_start(problem, max_iter, max_step)
     if start is None:
@@ -582,6 +591,10 @@ def solve_equilibrium(
         except ValueError as exc:  # a kernel refused every trial film
             raise EquilibriumError(f"no admissible start position: {exc}") from exc
     u = np.asarray(start, dtype=float).copy()
+    if warm and problem._reference is None:
+        # a warm start continues a chain of neighbouring points (sweeps, `cmpsim reproduce`):
+        # refine against the last factorisation made on this grid (in this thread)
+        problem._reference = _last_factors().get(problem.grid)
     try:
         st = problem.state(u)
     except ValueError:
@@ -605,7 +618,23 @@ def solve_equilibrium(
             u, st, it, history = _newton(problem, u, st, tol, max_iter, max_step)
         except (EquilibriumError, ValueError) as second:
             raise EquilibriumError(f"{first}; a restart from an attack-angle scan failed too: {second}") from first
+    if problem._reference is not None:
+        cache = _last_factors()
+        if len(cache) > 8:
+            cache.clear()
+        cache[problem.grid] = problem._reference
     return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+
+
+_THREAD = threading.local()
+
+
+def _last_factors() -> dict:
+    """Grid -> the last factorisation of an equilibrium solved on it in this thread."""
+    cache = getattr(_THREAD, "factors", None)
+    if cache is None:
+        cache = _THREAD.factors = {}
+    return cache
 
 
 #: Coarse grids of the warm start, coarsest first.
@@ -680,6 +709,9 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
     """The safeguarded Newton loop of :func:`solve_equilibrium`: (u, state, steps, history)."""
     history = [(u.copy(), st.residual.copy())]
     it = 0
+    # trust radius (sigma): shrunk to twice the step the line search accepted, regrown by 2 on
+    # every full step, so that a step that had to be cut is not retried from max_step
+    trust = max_step
     while _merit(st.residual) >= tol:
         if it >= max_iter:
             raise EquilibriumError(f"Newton did not converge in {max_iter} steps; {_diagnosis(problem, st)}")
@@ -690,8 +722,9 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
         except np.linalg.LinAlgError as exc:
             raise EquilibriumError(f"singular Jacobian at h0 = {u[0]:.6g} m: {exc}") from exc
         scaled = np.abs(step) / problem.u_scale
-        if scaled.max() > max_step:
-            step *= max_step / scaled.max()
+        if scaled.max() > trust:
+            step *= trust / scaled.max()
+        size = min(scaled.max(), trust)
         alpha = 1.0
         reason = ""
         for _ in range(30):
@@ -710,6 +743,7 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
                 "line search failed: no step along the Newton direction lowers the residual; the "
                 f"equilibrium may not exist for these inputs{reason}; {_diagnosis(problem, st)}"
             )
+        trust = min(max_step, 2.0 * trust) if alpha == 1.0 else max(2.0 * alpha * size, 1e-6)
         u, st = trial, new
         history.append((u.copy(), st.residual.copy()))
     return u, st, it, history
