@@ -35,7 +35,7 @@ def _problem(**settings):
 
 
 @pytest.mark.parametrize("settings", [{}, {"grid": "48x128"}, {"slurry_model": "newtonian"}])
-@pytest.mark.parametrize("du", [(0.03, 0.0, 0.0), (0.0, 1e-6, 0.0), (1e-6, 0.0, 1e-7)])
+@pytest.mark.parametrize("du", [(0.005, 0.0, 0.0), (0.0, 1e-6, 0.0), (1e-6, 0.0, 1e-7)])
 def test_refinement_against_a_neighbours_lu_gives_the_fresh_lu_pressure(settings, du):
     pr = _problem(**settings)
     u = pr.contact_only_start()

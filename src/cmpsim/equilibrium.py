@@ -61,6 +61,13 @@ __all__ = [
 
 MODEL_VARIANTS = ("lep", "elastic", "hydrodynamic")
 
+#: A Newton step's Jacobian factorises its state's matrix when solving that state by iterative
+#: refinement took more back-substitutions than this (the old factorisation is too far away).
+JACOBIAN_REFINE_LIMIT = 10
+#: The Jacobian's columns are finite differences accurate to ~1e-6: their linear solves by
+#: refinement stop at this relative accuracy (the pressure solves themselves go to round-off).
+JACOBIAN_RTOL = 1e-10
+
 #: Gauge pressure of absolute vacuum, Pa (one standard atmosphere below ambient): the lowest
 #: admissible cavitation pressure.
 VACUUM_GAUGE_PRESSURE = -101325.0
@@ -395,15 +402,26 @@ class WaferProblem:
         dcdh = [(c1[m] - np.stack([c0.radial[m], c0.angular[m]])) / eps for m in range(5)]
         acting = None if st.cavitated is None else ~st.cavitated
         phi = st.phi.ravel()
+        dr = np.empty((phi.size, 3))
+        steps = []
         for k in range(3):
             du = np.zeros(3)
             du[k] = rel_step * self.u_scale[k]
-            u = st.u + du
-            dh = self.film(u, self._xf, self._yf) - hf
+            steps.append(du)
+            dh = self.film(st.u + du, self._xf, self._yf) - hf
             dc = [d * dh for d in dcdh]
             dcoeffs = FaceCoefficients(tuple(a[0] for a in dc), tuple(a[1] for a in dc))
-            dr = assemble_operator(self.grid, dcoeffs) @ phi + flux_divergence(self.grid, dcoeffs)
-            dphi = -st.system.solve_linear(dr).reshape(st.phi.shape)
+            dr[:, k] = assemble_operator(self.grid, dcoeffs) @ phi + flux_divergence(self.grid, dcoeffs)
+        system = st.system
+        if system.own_factor is None and system.refinement_steps > JACOBIAN_REFINE_LIMIT:
+            # the state is far from the factorised position: a new LU here pays for itself
+            # over the three columns and the next trial positions, which refine against it
+            system.factor
+            self._reference = system.own_factor
+        dphis = -system.solve_linear(dr, rtol=JACOBIAN_RTOL)
+        for k, du in enumerate(steps):
+            u = st.u + du
+            dphi = dphis[:, k].reshape(st.phi.shape)
             h = self.film(u, self.xc, self.yc)
             _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi, st.system, acting)
             J[:, k] = (self._residual(p_fluid + pc) - st.residual) / du[k]

@@ -330,6 +330,7 @@ class LinearSolveStats:
     def __init__(self):
         self.factorizations = 0
         self.back_substitutions = 0
+        self.last_refinement = 0  # back-substitutions of the last call of refine()
 
 
 #: Iterative refinement against another matrix's factorisation stops when the correction is
@@ -337,7 +338,7 @@ class LinearSolveStats:
 REFINE_RTOL = 1e-14
 #: ... and is abandoned for a fresh factorisation when it has not got there in this many
 #: back-substitutions, or when successive corrections shrink by less than this factor.
-REFINE_MAX = 16
+REFINE_MAX = 10
 REFINE_CONTRACTION = 0.5
 #: Corrections that stop shrinking below this times max |phi| are round-off: converged.
 REFINE_STAGNATION = 1e-12
@@ -346,10 +347,12 @@ REFINE_STAGNATION = 1e-12
 def refine(matrix, factor, rhs, x0=None, rtol: float = REFINE_RTOL, max_iter: int = REFINE_MAX, stats=None):
     """Solve ``matrix @ x = rhs`` by iterative refinement with the factorisation of a nearby matrix.
 
-    x_{k+1} = x_k + F^-1 (rhs - matrix x_k), with F = ``factor`` (any object with ``.solve``).
-    Returns x, or None if the corrections do not shrink below ``rtol * max|x|`` within
-    ``max_iter`` back-substitutions at a rate of at least ``REFINE_CONTRACTION`` (then the
-    caller factorises ``matrix`` itself).
+    x_{k+1} = x_k + F^-1 (rhs - matrix x_k), with F = ``factor`` (any object with ``.solve``);
+    ``rhs`` may hold several columns (each is judged on its own scale). Returns x, or None if
+    the corrections do not shrink below ``rtol * max|x|`` within ``max_iter`` corrections at a
+    rate of at least ``REFINE_CONTRACTION`` (then the caller factorises ``matrix`` itself).
+    Corrections that stagnate below ``REFINE_STAGNATION * max|x|`` are round-off: converged.
+    ``stats.back_substitutions`` counts one per solve call (all columns at once).
     """
     x = np.asarray(factor.solve(rhs)) if x0 is None else np.array(x0, dtype=float)
     n_solves = 1 if x0 is None else 0
@@ -359,25 +362,26 @@ def refine(matrix, factor, rhs, x0=None, rtol: float = REFINE_RTOL, max_iter: in
         dx = np.asarray(factor.solve(rhs - matrix @ x))
         n_solves += 1
         x += dx
-        size = float(np.max(np.abs(dx)))
-        scale = float(np.max(np.abs(x)))
+        # largest correction relative to its own column's scale
+        size = float(np.max(np.max(np.abs(dx), axis=0) / np.maximum(np.max(np.abs(x), axis=0), 1e-300)))
         if not np.isfinite(size):
             break
-        if size <= rtol * max(scale, 1e-300):
+        if size <= rtol:
             ok = True
             break
-        if np.isfinite(prev) and size < prev and size > rtol * scale:
-            # at this rate, would it converge in the back-substitutions left?
-            needed = np.log(rtol * scale / size) / np.log(size / prev)
-            if needed > max_iter - n_solves + 1:
+        if size < prev and np.isfinite(prev):
+            # at this rate, would it converge in the corrections left?
+            needed = np.log(rtol / size) / np.log(size / prev)
+            if needed > max_iter - n_solves + 1 and size > REFINE_STAGNATION:
                 break
         if size > REFINE_CONTRACTION * prev:
-            # stagnation: at round-off (what a fresh factorisation would leave too) it has converged
-            ok = prev <= REFINE_STAGNATION * max(scale, 1e-300)
+            # stagnation at round-off (what a fresh factorisation would leave too): converged
+            ok = prev <= REFINE_STAGNATION
             break
         prev = size
     if stats is not None:
         stats.back_substitutions += n_solves
+        stats.last_refinement = n_solves
     return x if ok else None
 
 
@@ -416,6 +420,7 @@ class ReynoldsSystem:
         self.reference = reference
         self.stats = stats if stats is not None else LinearSolveStats()
         self.factorizations = 0
+        self.refinement_steps = 0  # back-substitutions of the last solve by refinement (0: none)
 
     @property
     def factor(self):
@@ -431,11 +436,15 @@ class ReynoldsSystem:
         """This matrix's own factorisation if one was computed, else None."""
         return self._factor
 
-    def solve_linear(self, rhs, x0=None) -> np.ndarray:
-        """x with ``matrix @ x = rhs`` (flat): refinement against the reference if there is one."""
-        rhs = np.asarray(rhs, dtype=float).ravel()
+    def solve_linear(self, rhs, x0=None, rtol: float = REFINE_RTOL) -> np.ndarray:
+        """x with ``matrix @ x = rhs`` (flat, or columns (N, k)): refinement against the reference if any
+        (to ``rtol`` relative, see :func:`refine`), else this matrix's own factorisation."""
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.ndim == 1 or rhs.shape[0] != self.grid.size:
+            rhs = rhs.ravel()
         if self._factor is None and self.reference is not None:
-            x = refine(self.matrix, self.reference, rhs, x0=x0, stats=self.stats)
+            x = refine(self.matrix, self.reference, rhs, x0=x0, rtol=rtol, stats=self.stats)
+            self.refinement_steps = self.stats.last_refinement
             if x is not None:
                 return x
         x = np.asarray(self.factor.solve(rhs))
