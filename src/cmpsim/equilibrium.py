@@ -387,12 +387,14 @@ class WaferProblem:
 
     def _film_jacobian(self, st: PressureState, rel_step: float) -> np.ndarray:
         """:meth:`jacobian` for the linear (non-JFO) system on a rigid pad, in one extra
-        coefficient evaluation.
+        coefficient evaluation and one extra contact evaluation.
 
         The face coefficients depend on the local film only (and on the fixed face position),
         so dc/du_k = dc/dh dh/du_k: one forward difference in h gives dc/dh on every face, the
         film changes dh/du_k follow from the geometry, and since A phi - b is linear in the
-        coefficients its change is A(dc_k) phi + div(dc_k). Then dphi = -A^-1 dr as before.
+        coefficients its change is A(dc_k) phi + div(dc_k). Then dphi = -A^-1 dr as before
+        (the three columns in one solve). The contact pressure and area likewise take
+        dp_c/dh dh/du_k from one evaluation at h + eps.
         """
         J = np.empty((3, 3))
         hf = self.film(st.u, self._xf, self._yf)
@@ -419,13 +421,29 @@ class WaferProblem:
             system.factor
             self._reference = system.own_factor
         dphis = -system.solve_linear(dr, rtol=JACOBIAN_RTOL)
+        # contact depends on the local film only: one evaluation gives its derivative in h
+        if self.variant == "hydrodynamic":
+            dpc = dar = 0.0
+        else:
+            pc1, ae1, aep1, ap1 = self.contact(st.h + eps)
+            dpc = (pc1 - st.p_contact) / eps
+            dar = (ae1 + aep1 + ap1 - st.area_ratio) / eps
         for k, du in enumerate(steps):
-            u = st.u + du
             dphi = dphis[:, k].reshape(st.phi.shape)
-            h = self.film(u, self.xc, self.yc)
-            _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi, st.system, acting)
-            J[:, k] = (self._residual(p_fluid + pc) - st.residual) / du[k]
+            dh = self.film(st.u + du, self.xc, self.yc) - st.h
+            gauge = self._gauge(st.phi + dphi, acting)
+            p_total = (1.0 - (st.area_ratio + dar * dh)) * gauge + st.p_contact + dpc * dh
+            J[:, k] = (self._residual(p_total) - st.residual) / du[k]
         return J
+
+    def _gauge(self, phi, acting=None):
+        """Gauge slurry pressure acting on the wafer for the unknown phi (not JFO), Pa."""
+        if not self.newtonian:
+            return self.p0 * np.exp(phi) - self.p0
+        if self.cavitation == "gumbel":
+            cav = phi <= self.p_cav if acting is None else ~acting
+            return np.where(cav, self.p_cav, phi)
+        return phi
 
     # ------------------------------------------------------------------ starts
     def contact_only_start(self) -> np.ndarray:
@@ -448,7 +466,9 @@ class WaferProblem:
                 f"touches the pad mean plane (contact pressure at zero film is {excess(h_lo) + 1:.3g} "
                 "x the applied pressure); lower applied_pressure or stiffen the pad"
             )
-        h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * self.sigma, rtol=1e-12)
+        h0 = _contact_root(self, shape, h_lo, h_hi)
+        if h0 is None:  # the safeguarded Newton did not settle: bracket and Brent
+            h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * self.sigma, rtol=1e-12)
         return np.array([h0, 0.0, 0.0])
 
     def fluid_start(self) -> np.ndarray:
@@ -471,6 +491,50 @@ class WaferProblem:
                 return np.array([a + (b - a) * fa / (fa - fb), 0.0, 0.0])
         best = min(vals, key=lambda v: abs(v[1]))
         return np.array([best[0], 0.0, 0.0])
+
+
+def _contact_root(problem: WaferProblem, shape, h_lo: float, h_hi: float, max_iter: int = 30):
+    """h0 where the contact load equals the applied load, by Newton's method on its logarithm.
+
+    ln(load) is close to linear in h0 over the contact layer (the summit heights are nearly
+    Gaussian), so Newton converges in a few steps: the first slope from one contact evaluation
+    at two films (h0 and h0 + eps, stacked), the later ones secants through the last two. Steps are kept inside the bracket [h_lo, h_hi] (bisection
+    otherwise). Returns None if it does not converge to 1e-6 sigma.
+    """
+    sigma = problem.sigma
+    eps = 1e-6 * sigma
+    target = np.log(problem.load_scale)
+    lo, hi = h_lo, h_hi
+    h0 = 0.5 * (lo + hi)
+    prev = None  # (h0, g) of the last iterate: secant slope after the first step
+    for _ in range(max_iter):
+        if prev is None:
+            pc = problem.contact(np.stack([h0 + shape, h0 + eps + shape]))[0]
+            f0, f1 = problem.grid.integrate(pc[0]), problem.grid.integrate(pc[1])
+        else:
+            f0 = problem.grid.integrate(problem.contact(h0 + shape)[0])
+        if f0 <= 0.0:  # no contact at all: the root is below
+            hi = h0
+            h0, prev = 0.5 * (lo + hi), None
+            continue
+        g = np.log(f0) - target
+        if g > 0:
+            lo = h0
+        else:
+            hi = h0
+        if prev is None:
+            slope = (np.log(f1) - np.log(f0)) / eps if f1 > 0 else -np.inf
+        else:
+            slope = (g - prev[1]) / (h0 - prev[0])
+        prev = (h0, g)
+        step = -g / slope if np.isfinite(slope) and slope < 0 else np.nan
+        new = h0 + step
+        if not (lo < new < hi):
+            new = 0.5 * (lo + hi)
+        if abs(new - h0) < 1e-6 * sigma or hi - lo < 1e-6 * sigma:
+            return new
+        h0 = new
+    return None
 
 
 def _check_cavitation(slurry_model: str, cavitation: str, cavitation_pressure) -> None:

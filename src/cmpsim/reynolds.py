@@ -335,7 +335,7 @@ class LinearSolveStats:
 
 #: Iterative refinement against another matrix's factorisation stops when the correction is
 #: below this times the largest |phi| (the fresh-LU answer is reproduced to round-off) ...
-REFINE_RTOL = 1e-14
+REFINE_RTOL = 1e-13
 #: ... and is abandoned for a fresh factorisation when it has not got there in this many
 #: back-substitutions, or when successive corrections shrink by less than this factor.
 REFINE_MAX = 10
