@@ -92,3 +92,44 @@ def test_axisymmetric_poisson_solution_converges_at_second_order():
     print(f"\naxisymmetric Poisson: errors {errs}, observed orders {orders}")
     assert errs[-1] < 1e-3 * R * R
     assert np.all(np.abs(orders - 2.0) < 0.2)
+
+
+def _slider_fv(n: int, length: float, h_in: float, h_out: float, lub) -> tuple[np.ndarray, np.ndarray]:
+    """phi = ln(p/p0) of eq. 5 on a line (conservative finite volumes, phi = 0 at both ends), with
+    the Reynolds coefficients of cmpsim's kernels at the faces."""
+    from cmpsim.reynolds import lubrication_coefficients
+
+    x = np.linspace(0.0, length, n + 1)
+    xf = 0.5 * (x[1:] + x[:-1])
+    hf = h_in + (h_out - h_in) * xf / length
+    dxx, _, _, qx, _, _ = lubrication_coefficients(hf, xf, np.zeros_like(xf), lub)
+    dx = length / n
+    # interior node k: D_{k+1/2}(phi_{k+1} - phi_k)/dx - D_{k-1/2}(phi_k - phi_{k-1})/dx = q_{k+1/2} - q_{k-1/2}
+    a = np.diag(-(dxx[1:] + dxx[:-1]) / dx) + np.diag(dxx[1:-1] / dx, 1) + np.diag(dxx[1:-1] / dx, -1)
+    phi = np.linalg.solve(a, qx[1:] - qx[:-1])
+    return x[1:-1], phi
+
+
+def test_eq_5_for_a_smooth_thin_film_is_reynolds_plane_slider_with_eta_equal_to_a_d_over_t_v():
+    """With h/d small (Psi -> h/2d) and a smooth film (flow factors -> 1), ln(p/p0) obeys Reynolds'
+    slider with viscosity (a/t) d / v: the kernels' coefficients reproduce the closed form
+    (cmpsim.testing.references) at second order in the line spacing."""
+    from cmpsim.flowfactors import RoughnessGeometry
+    from cmpsim.kinematics import Kinematics
+    from cmpsim.reynolds import LubricationParameters
+    from cmpsim.testing.references import tilted_slider_pressure
+
+    d, v, t_over_a, length, h_in, h_out = 1e-6, 2.0, 1.3, 0.05, 20e-6, 10e-6
+    kin = Kinematics(2 * np.pi, 2 * np.pi, 0.1, "sliding")
+    lub = LubricationParameters(
+        particle_diameter=d, w_over_k=1e-14, t_over_a=t_over_a, fluctuation_velocity=v,
+        roughness=RoughnessGeometry(1e-12 * h_out), kinematics=kin, flow_factor_floor=0.05,
+    )
+    errors = []
+    for n in (40, 80, 160):
+        x, phi = _slider_fv(n, length, h_in, h_out, lub)
+        exact = tilted_slider_pressure(x, length, h_in, h_out, kin.sliding_speed, viscosity=d / (t_over_a * v))
+        errors.append(np.max(np.abs(phi - exact)) / np.max(exact))
+    assert errors[-1] < 1e-4
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all(orders > 1.9), orders

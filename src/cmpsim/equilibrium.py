@@ -95,6 +95,9 @@ class WaferProblem:
     pad : PadSurface or None
         Asperity description; ``None`` only for the hydrodynamic variant.
     variant : {"lep", "elastic", "hydrodynamic"}
+    solver : callable, optional
+        Sparse solver of every pressure solve, passed to :class:`~cmpsim.reynolds.ReynoldsSystem`
+        (``solver(A)`` returning an object with ``.solve(b)``); default a sparse LU.
     """
 
     def __init__(
@@ -107,6 +110,7 @@ class WaferProblem:
         pad: PadSurface | None,
         variant: str = "lep",
         separation_offset: float = 0.0,
+        solver=None,
     ):
         if variant not in MODEL_VARIANTS:
             raise ValueError(f"model must be one of {MODEL_VARIANTS}; got {variant!r}")
@@ -124,6 +128,7 @@ class WaferProblem:
         self.pad = pad
         self.variant = variant
         self.separation_offset = separation_offset
+        self.solver = solver
         self.sigma = lubrication.roughness.sigma
         R = grid.radius
         self.xc, self.yc = grid.centres
@@ -180,7 +185,7 @@ class WaferProblem:
         u = np.asarray(u, dtype=float)
         h = self.film(u, self.xc, self.yc)
         coeffs = self.face_coefficients(u)
-        system = ReynoldsSystem(self.grid, coeffs)
+        system = ReynoldsSystem(self.grid, coeffs, solver=self.solver)
         phi = system.solve()
         self.factorizations += 1
         if not np.all(np.isfinite(phi)) or phi.max() > 300.0:  # p > 1e130 p0: no physical state

@@ -12,7 +12,7 @@ import numpy as np
 from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
 from .flowfactors import shear_stress_factors
-from .grainflow import grain_coefficients
+from .grainflow import grain_coefficients, granular_viscosity
 from .removal import contact_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
 from .setup import PhysicalSetup
 
@@ -33,9 +33,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
     _, _, dux, duy = setup.kinematics.mean_and_relative(xc, yc)
     ar = st.area_ratio
-    tsx, tsy = slurry_shear_stress(
-        st.p_slurry, grad_p, st.h, (dux, duy), lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a, phi_fs, phi_fp
-    )
+    eta = granular_viscosity(st.p_slurry, lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a)
+    tsx, tsy = slurry_shear_stress(eta, grad_p, st.h, (dux, duy), phi_fs=phi_fs, phi_fp=phi_fp)
     tau_x = (1.0 - ar) * tsx
     tau_y = (1.0 - ar) * tsy
     if config.removal_shear == "total":

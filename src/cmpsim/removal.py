@@ -18,33 +18,30 @@ __all__ = ["slurry_shear_stress", "contact_shear_stress", "removal_rate", "shear
 REMOVAL_LAWS = ("paper", "shear_power")
 
 
-def slurry_shear_stress(p_abs, grad_p, h, du, particle_diameter, fluctuation_velocity, t_over_a, phi_fs, phi_fp):
+def slurry_shear_stress(viscosity, grad_p, h, du, *, phi_fs, phi_fp):
     """Average shear stress of the grain flow on the wafer (Patir–Cheng form, eq. 14–15), Pa.
 
-    tau = eta du / h (1 + Phi_fs) - Phi_fp (h/2) grad p, with the Haff viscosity
-    eta = (a/t) p d / v (eq. 1) of the local absolute granular pressure p.
+    tau = eta du / h (1 + Phi_fs) - Phi_fp (h/2) grad p (Patir & Cheng, doi:10.1115/1.3453103),
+    with eta the local Haff viscosity (:meth:`cmpsim.grainflow.GrainFlow.viscosity`).
 
     Parameters
     ----------
-    p_abs : array
-        Absolute granular pressure p, Pa.
+    viscosity : array
+        Granular viscosity eta = (a/t) p d / v at the local absolute pressure p, Pa s.
     grad_p : tuple of arrays
         (dp/dx, dp/dy), Pa/m.
     h : array
         Film thickness, m.
     du : tuple of arrays
         Relative velocity u_pad - u_wafer, m/s.
-    particle_diameter, fluctuation_velocity, t_over_a : float
-        d (m), v (m/s), t/a (-).
     phi_fs, phi_fp : array
-        Shear-stress factors (eq. 14, 15), dimensionless.
+        Shear-stress factors (eq. 14, 15), dimensionless (keywords).
 
     Returns
     -------
     (tau_x, tau_y) : tuple of arrays, Pa (the drag of the slurry on the wafer).
     """
-    eta = np.asarray(p_abs) * particle_diameter / (t_over_a * fluctuation_velocity)
-    couette = eta / h * (1.0 + phi_fs)
+    couette = np.asarray(viscosity) / h * (1.0 + phi_fs)
     half = 0.5 * phi_fp * h
     return couette * du[0] - half * grad_p[0], couette * du[1] - half * grad_p[1]
 
