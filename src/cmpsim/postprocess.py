@@ -12,8 +12,9 @@ import numpy as np
 from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
 from .flowfactors import shear_stress_factors
-from .grainflow import grain_coefficients, granular_viscosity
-from .removal import contact_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
+from .grainflow import GrainFlow, grain_coefficients
+from .removal import contact_shear_stress, newtonian_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
+from .reynolds import NEWTONIAN_GRAIN_COEFFICIENT
 from .setup import PhysicalSetup
 
 __all__ = ["evaluate_outputs"]
@@ -27,21 +28,33 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     lub = setup.lubrication
     xc, yc = problem.xc, problem.yc
     # shear stress and removal rate
-    grad_phi = g.gradient(st.phi, 0.0)
-    grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
-    _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
-    phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
     _, _, dux, duy = setup.kinematics.mean_and_relative(xc, yc)
     ar = st.area_ratio
-    eta = granular_viscosity(st.p_slurry, lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a)
-    tsx, tsy = slurry_shear_stress(eta, grad_p, st.h, (dux, duy), phi_fs=phi_fs, phi_fp=phi_fp)
+    newtonian = lub.slurry_model == "newtonian"
+    if newtonian:
+        # p_slurry is the gauge pressure acting on the wafer; the normal stress of the paper's
+        # removal law takes its compressive part (docs/model.md, "Newtonian slurry and cavitation")
+        grad_p = g.gradient(st.p_slurry, 0.0)
+        f = np.full(st.h.shape, NEWTONIAN_GRAIN_COEFFICIENT)
+        phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
+        theta = 1.0 if st.fill_fraction is None else st.fill_fraction
+        tsx, tsy = newtonian_shear_stress(grad_p, st.h, (dux, duy), lub.viscosity, phi_fs, phi_fp, theta)
+        p_normal = np.maximum(st.p_slurry, 0.0)
+    else:
+        grad_phi = g.gradient(st.phi, 0.0)
+        grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
+        _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
+        phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
+        grain = GrainFlow(lub.particle_diameter, lub.w_over_k, lub.t_over_a, lub.fluctuation_velocity)
+        tsx, tsy = slurry_shear_stress(st.p_slurry, grad_p, st.h, (dux, duy), grain, phi_fs=phi_fs, phi_fp=phi_fp)
+        p_normal = st.p_slurry
     tau_x = (1.0 - ar) * tsx
     tau_y = (1.0 - ar) * tsy
     if config.removal_shear == "total":
         tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
         tau_x, tau_y = tau_x + tcx, tau_y + tcy
     tau = np.hypot(tau_x, tau_y)
-    sigma_n = (1.0 - ar) * st.p_slurry + st.p_contact
+    sigma_n = (1.0 - ar) * p_normal + st.p_contact
     if config.removal_law == "shear_power":
         rr = shear_power_removal_rate(
             st.p_contact, np.hypot((1.0 - ar) * tsx, (1.0 - ar) * tsy), np.hypot(dux, duy),
@@ -68,7 +81,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "mean_normal_stress_pa": g.integrate(sigma_n) / area,
         "mean_shear_stress_pa": g.integrate(tau) / area,
         "removal_rate": g.integrate(rr) / area,
-        "ambient_pressure_pa": setup.ambient_pressure,
+        # the slurry pressure at the wafer edge: p0 (granular), ambient = 0 gauge (Newtonian)
+        "ambient_pressure_pa": 0.0 if newtonian else setup.ambient_pressure,
         "sliding_speed_m_s": setup.kinematics.sliding_speed,
         "load_residual": float(st.residual[0]),
         "moment_residual": float(max(abs(st.residual[1]), abs(st.residual[2]))),
@@ -81,7 +95,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     polar = {
         "film_thickness": st.h,
         "slurry_pressure": st.p_fluid,
-        "granular_pressure": st.p_slurry,
+        "granular_pressure": p_normal,
         "contact_pressure": st.p_contact,
         "total_pressure": st.p_total,
         "area_ratio_elastic": st.area_elastic,
@@ -91,4 +105,6 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "shear_stress": tau,
         "removal_rate": rr,
     }
+    if st.fill_fraction is not None:
+        polar["fill_fraction"] = st.fill_fraction
     return scalars, polar

@@ -10,9 +10,10 @@ As ContactMechanics keeps its Hertz and Greenwood-Tripp references, cmpsim keeps
   the paper prints them (eq. 6, 7, 18, 19; Haff, doi:10.1017/S0022112083003419), in 50 digits;
 * :func:`printed_flow_factors`: the average-flow factors exactly as printed (eq. 8-17;
   Patir & Cheng, doi:10.1115/1.3453103; Tripp, doi:10.1115/1.3254640);
-* :func:`tilted_slider_pressure`: the closed-form pressure of Reynolds' infinitely wide plane
-  inclined slider (Reynolds 1886, doi:10.1098/rstl.1886.0005), the limit that eq. 5 reduces
-  to for a smooth film with h/d small (see ``docs/model.md``, section 3).
+* the lubrication references live in :mod:`cmpsim.testing.lubrication`: the closed-form
+  tilted (plane inclined) slider of Reynolds' equation (Hamrock, *Fundamentals of Fluid Film
+  Lubrication*, ch. 8), its Gumbel and mass-conserving (JFO) cavitated forms, and the 1-D
+  strip problem built from the wafer's kernels; :func:`tilted_slider_pressure` is the first.
 
 None of them calls the kernel it checks. The module needs mpmath, a test dependency
 (``pip install cmpsim[test]``); ``import cmpsim`` never imports it.
@@ -24,7 +25,8 @@ import contextlib
 import math
 
 import mpmath as mp
-import numpy as np
+
+from .lubrication import plane_slider_pressure as tilted_slider_pressure
 
 __all__ = [
     "contact_reference_mp",
@@ -36,7 +38,6 @@ __all__ = [
     "psi_eq17",
     "tilted_slider_pressure",
 ]
-
 
 # --- asperity contact (eq. 20-29) ------------------------------------------------------------
 def _mp_pad(pad):
@@ -187,18 +188,3 @@ def printed_flow_factors(hs, f, g, s1, s2, g1, g2, t1, t2):
         "fs": -3 * e**2 * (w2 * p2 - w1 * p1),  # eq. 14
         "fp": 1 - e**2 * f * (w2 * p2 + w1 * p1),  # eq. 15
     }
-
-
-# --- Reynolds' plane inclined slider ---------------------------------------------------------
-def tilted_slider_pressure(x, length: float, h_in: float, h_out: float, speed: float, viscosity: float):
-    """Pressure of the infinitely wide plane inclined slider, Pa (Reynolds 1886), closed form.
-
-    The film falls linearly from ``h_in`` at x = 0 to ``h_out`` at x = ``length`` (m); one
-    surface slides at ``speed`` (m/s) along +x, the other is at rest; p = 0 at both ends. It
-    solves d/dx(h^3/(12 eta) dp/dx) = (speed/2) dh/dx:
-
-        p(x) = 6 eta U (h_in - h)(h - h_out) / (h^2 (h_in + h_out)) * L / (h_in - h_out).
-    """
-    x = np.asarray(x, dtype=float)
-    h = h_in + (h_out - h_in) * x / length
-    return 6.0 * viscosity * speed * length * (h_in - h) * (h - h_out) / (h * h * (h_in + h_out) * (h_in - h_out))
