@@ -10,7 +10,7 @@ from cmpsim.equilibrium import WaferProblem
 from cmpsim.flowfactors import RoughnessGeometry
 from cmpsim.grid import PolarGrid
 from cmpsim.kinematics import Kinematics
-from cmpsim.references_lubrication import gumbel_load, jfo_diverging_slider, linear_film_pressure, strip_problem
+from cmpsim.testing.lubrication import gumbel_load, jfo_diverging_slider, linear_film_pressure, strip_problem
 from cmpsim.reynolds import LubricationParameters, ReynoldsSystem, face_fluxes, flux_divergence
 from cmpsim.setup import build_problem
 

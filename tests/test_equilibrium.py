@@ -195,6 +195,26 @@ def test_a_diverging_trial_film_in_the_hydrodynamic_start_is_not_reported_as_bad
         assert data["converged"] and abs(data["load_residual"]) < 1e-6
 
 
+def test_wafer_problem_solves_every_pressure_with_the_injected_solver_and_solve_reuses_a_built_problem():
+    from cmpsim.equilibrium import WaferProblem
+    from cmpsim.reynolds import factorize
+    from cmpsim.setup import physical_setup
+
+    calls = []
+
+    def counting(A):
+        calls.append(A.shape)
+        return factorize(A)
+
+    cfg = cmpsim.Config.default().replace(grid="coarse")
+    s = physical_setup(cfg)
+    problem = WaferProblem(s.grid, cfg.dome_height, cfg.applied_pressure, s.ambient_pressure, s.lubrication, s.pad, cfg.model, solver=counting)
+    reused = cmpsim.solve(cfg, problem=problem, relative=False)
+    assert reused.problem is problem and len(calls) == reused.factorizations > 0
+    fresh = cmpsim.solve(cfg, relative=False)
+    assert fresh.to_dict() == reused.to_dict()
+
+
 # ---------------------------------------------------------------- Newtonian slurry with cavitation
 NEWTONIAN_CASES = [("none", "-98.2 kPa"), ("gumbel", "-98.2 kPa"), ("jfo", "-98.2 kPa"), ("gumbel", "0 kPa"), ("jfo", "0 kPa")]
 

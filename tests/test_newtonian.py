@@ -10,7 +10,7 @@ from cmpsim.equilibrium import WaferProblem
 from cmpsim.flowfactors import RoughnessGeometry
 from cmpsim.grid import PolarGrid
 from cmpsim.kinematics import Kinematics
-from cmpsim.references_lubrication import plane_slider_load, plane_slider_pressure, strip_problem
+from cmpsim.testing.lubrication import plane_slider_load, plane_slider_pressure, strip_problem
 from cmpsim.removal import newtonian_shear_stress
 from cmpsim.reynolds import LubricationParameters, lubrication_coefficients
 from cmpsim.setup import build_problem, physical_setup

@@ -138,6 +138,9 @@ class WaferProblem:
         p_cav, gauge, Pa, in [-101325, 0]; required unless ``cavitation == "none"``.
     foundation : compliance.WinklerFoundation or None
         Elastic pad stack under the asperity layer; ``None`` = rigid pad (the paper).
+    solver : callable, optional
+        Sparse solver of every pressure solve, passed to the Reynolds (or cavitation) system
+        (``solver(A)`` returning an object with ``.solve(b)``); default a sparse LU.
     """
 
     def __init__(
@@ -153,6 +156,7 @@ class WaferProblem:
         cavitation: str = "none",
         cavitation_pressure: float | None = None,
         foundation: compliance.WinklerFoundation | None = None,
+        solver=None,
     ):
         if variant not in MODEL_VARIANTS:
             raise ValueError(f"model must be one of {MODEL_VARIANTS}; got {variant!r}")
@@ -171,6 +175,7 @@ class WaferProblem:
         self.pad = pad
         self.variant = variant
         self.separation_offset = separation_offset
+        self.solver = solver
         self.newtonian = lubrication.slurry_model == "newtonian"
         self.cavitation = cavitation
         self.p_cav = None if cavitation == "none" else float(cavitation_pressure)
@@ -253,12 +258,12 @@ class WaferProblem:
         """The discrete slurry problem of these face coefficients (JFO: on ``frozen``'s set if given)."""
         if self.cavitation == "jfo":
             if frozen is not None:
-                return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=frozen.system.cavitated)
+                return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=frozen.system.cavitated, solver=self.solver)
             # start the active-set iteration from the last solved set (the solution does not depend on it)
-            system = CavitationSystem(self.grid, coeffs, self.p_cav, guess=self._last_cavitated)
+            system = CavitationSystem(self.grid, coeffs, self.p_cav, guess=self._last_cavitated, solver=self.solver)
             self._last_cavitated = system.cavitated if system.cavitated.any() else None
             return system
-        return ReynoldsSystem(self.grid, coeffs)
+        return ReynoldsSystem(self.grid, coeffs, solver=self.solver)
 
     def state(self, u) -> PressureState:
         """Solve the Reynolds equation and evaluate contact and residuals at position u."""

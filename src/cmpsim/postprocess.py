@@ -12,7 +12,7 @@ import numpy as np
 from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
 from .flowfactors import shear_stress_factors
-from .grainflow import grain_coefficients
+from .grainflow import GrainFlow, grain_coefficients
 from .removal import contact_shear_stress, newtonian_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
 from .reynolds import NEWTONIAN_GRAIN_COEFFICIENT
 from .setup import PhysicalSetup
@@ -45,9 +45,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
         _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
         phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
-        tsx, tsy = slurry_shear_stress(
-            st.p_slurry, grad_p, st.h, (dux, duy), lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a, phi_fs, phi_fp
-        )
+        grain = GrainFlow(lub.particle_diameter, lub.w_over_k, lub.t_over_a, lub.fluctuation_velocity)
+        tsx, tsy = slurry_shear_stress(st.p_slurry, grad_p, st.h, (dux, duy), grain, phi_fs=phi_fs, phi_fp=phi_fp)
         p_normal = st.p_slurry
     tau_x = (1.0 - ar) * tsx
     tau_y = (1.0 - ar) * tsy

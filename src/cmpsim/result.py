@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from . import __version__
+from ._version import __version__
 from .config import PARAMETERS, Config, format_display
 
 __all__ = ["Result", "SCALARS", "REFERENCES"]
