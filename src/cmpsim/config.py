@@ -13,9 +13,10 @@ import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
+
+from . import units
 
 __all__ = [
     "Param",
@@ -66,6 +67,17 @@ class Param:
         hb = ")" if (self.high is None or self.high_open) else "]"
         unit = f" {self.unit}" if self.unit else ""
         return f"{lb}{lo}, {hi}{hb}{unit}"
+
+    def check(self, value: Any) -> Any:
+        """``value`` if valid (an SI number, or the text of a choice or grid); ``ValueError`` naming the range if not."""
+        if self.choices:
+            text = str(value).strip()
+            if text not in self.choices:
+                raise ValueError(f"{self.name} must be {self.range_text()}; got {value!r}")
+            return text
+        if self.unit == "grid":
+            return _parse_grid(value)
+        return _check_range(self, value)
 
 
 _P = Param
@@ -137,14 +149,6 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 
 
-@lru_cache(maxsize=1)
-def _ureg():
-    import pint
-
-    ureg = pint.UnitRegistry()
-    return ureg
-
-
 def _check_range(p: Param, v: float) -> float:
     if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v) or math.isinf(v):
         raise ValueError(f"{p.name} must be a finite number; valid range {p.range_text()}; got {v!r}")
@@ -190,42 +194,12 @@ def _parse_grid(value: Any) -> str:
 
 
 def parse_value(name: str, value: Any) -> Any:
-    """Convert one input to its SI value, checking unit dimension and range.
+    """Convert one input to its SI value, checking unit dimension and range (:func:`cmpsim.units.parse`).
 
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number
     (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
     """
-    if name not in PARAMETERS:
-        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
-    p = PARAMETERS[name]
-    if p.choices:
-        s = str(value).strip()
-        if s not in p.choices:
-            raise ValueError(f"{name} must be {p.range_text()}; got {value!r}")
-        return s
-    if p.unit == "grid":
-        return _parse_grid(value)
-    if isinstance(value, bool):
-        raise ValueError(f"{name} must be a number with units of {p.unit or 'none'}; got {value!r}")
-    if isinstance(value, (int, float)):
-        return _check_range(p, value)
-    # strings and quantities go through pint
-    ureg = _ureg()
-    try:
-        q = ureg.Quantity(value) if isinstance(value, str) else value
-    except Exception as exc:  # pint raises several error types for bad strings
-        raise ValueError(f"{name}: cannot read {value!r} as a quantity ({exc}); expected units of {p.unit or 'none (dimensionless)'}") from None
-    if not hasattr(q, "to"):
-        return _check_range(p, q)
-    target = p.unit or "dimensionless"
-    try:
-        si = q.to(target).magnitude
-    except Exception:
-        raise ValueError(
-            f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r}"
-            f" (e.g. {p.display or target})"
-        ) from None
-    return _check_range(p, float(si))
+    return units.parse(name, value)
 
 
 def _section_fields(section: str) -> list[str]:
@@ -377,16 +351,13 @@ class Config:
 
 
 def to_display(name: str, value: Any) -> Any:
-    """SI value of a parameter converted to its display unit (strings unchanged)."""
-    p = PARAMETERS[name]
-    if isinstance(value, str) or not p.display or p.display == p.unit:
-        return value
-    return _ureg().Quantity(value, p.unit).to(p.display).magnitude
+    """SI value of a parameter converted to its display unit (strings unchanged; :func:`cmpsim.units.to_display`)."""
+    return units.to_display(name, value)
 
 
 def format_display(name: str, value: Any) -> str:
-    v = to_display(name, value)
-    return v if isinstance(v, str) else f"{v:.6g}"
+    """SI value of a parameter as display text (:func:`cmpsim.units.format_display`)."""
+    return units.format_display(name, value)
 
 
 def parameter_table_markdown() -> str:

@@ -65,8 +65,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
     # film thickness: centre, and minimum over the cell centres and the rim
     u = st.u
-    rim_t = np.linspace(0.0, 2.0 * np.pi, 4 * g.n_theta, endpoint=False)
-    h_rim = problem.film(u, g.radius * np.cos(rim_t), g.radius * np.sin(rim_t))
+    h_rim = problem.film(u, *g.rim())
     h_center = float(problem.film(u, 0.0, 0.0))
     load = problem.load_scale
     scalars = {
