@@ -246,15 +246,15 @@ def _split_names(values) -> list[str]:
     return out
 
 
-def _base_config(config_path, assignments, grid):
-    cfg = load_config(config_path, assignments)
+def _base_config(config_path, assignments, grid, preset=None):
+    cfg = load_config(config_path, assignments, preset)
     return cfg.replace(grid=grid) if grid else cfg
 
 
 @main.command(name="reproduce", short_help="Regenerate the paper's Figs. 3-12, their CSVs and a trend-table report.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="reproduction", show_default=True, help="Directory for the ten PNG + CSV figures, trends.csv, REPORT.md and REPORT.html.")
 @click.option("--grid", type=click.Choice(["coarse", "default", "fine"]), default="default", show_default=True, help="Grid of every solve.")
-@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the figures do not vary (e.g. from `cmpsim calibrate`).")
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the figures do not vary (e.g. from `cmpsim calibrate`); inputs it does not set are the paper preset's.")
 def reproduce_command(out_dir, grid, config_path):
     """Regenerate the paper's Figs. 3-12, their CSVs and a report with the trend table.
 
@@ -265,7 +265,7 @@ def reproduce_command(out_dir, grid, config_path):
     from .reproduction import reproduce
 
     try:
-        cfg = load_config(config_path, ())
+        cfg = load_config(config_path, (), "paper")  # the paper's figures: the paper's model
     except ValueError as exc:
         _fail(str(exc))
     command = "cmpsim reproduce" + (f" --out {out_dir}" if out_dir != "reproduction" else "") + (f" --grid {grid}" if grid != "default" else "") + (f" --config {config_path}" if config_path else "")
@@ -294,7 +294,8 @@ def reproduce_command(out_dir, grid, config_path):
 @click.option("--grid", default=None, help="Grid preset (coarse, default, fine) or NRxNT; default: the configuration's.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="validation", show_default=True, help="Directory for parity.png, points.csv and datasets.csv.")
 @click.option("--markdown", is_flag=True, help="Print the tables as Markdown instead of rich tables.")
-def validate_command(data, config_path, assignments, grid, out_dir, markdown):
+@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
+def validate_command(data, config_path, assignments, grid, out_dir, markdown, preset):
     """Compare the model with measured data; with no DATA, every data set shipped with cmpsim.
 
     DATA are CSV files in the format of cmpsim/data/README.md (operating conditions with
@@ -305,7 +306,7 @@ def validate_command(data, config_path, assignments, grid, out_dir, markdown):
     from .validation import validate
 
     try:
-        cfg = _base_config(config_path, assignments, grid)
+        cfg = _base_config(config_path, assignments, grid, preset)
         report = validate(list(data) or None, config=cfg, progress=not markdown)
     except ValueError as exc:
         _fail(str(exc))
@@ -341,7 +342,8 @@ def validate_command(data, config_path, assignments, grid, out_dir, markdown):
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="Fitted configuration, accepted by `cmpsim run`, `validate --config` and `reproduce --config`.")
 @click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser.")
 @click.option("--quiet", is_flag=True, help="Do not print the evaluations while fitting.")
-def calibrate_command(data, free, bounds, config_path, assignments, grid, out_path, max_evaluations, quiet):
+@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
+def calibrate_command(data, free, bounds, config_path, assignments, grid, out_path, max_evaluations, quiet, preset):
     """Fit uncertain inputs to measurements (scipy least_squares, bounded).
 
     Reports fitted values with standard errors and 95 % intervals, their correlations and
@@ -358,7 +360,7 @@ def calibrate_command(data, free, bounds, config_path, assignments, grid, out_pa
             name, rng = item.split("=", 1)
             lo, hi = rng.split(":", 1)
             bnds[name.strip().replace("-", "_")] = (lo.strip(), hi.strip())
-        cfg = _base_config(config_path, assignments, grid)
+        cfg = _base_config(config_path, assignments, grid, preset)
         result = calibrate(list(data), names, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
     except ValueError as exc:
         _fail(str(exc))

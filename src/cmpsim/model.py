@@ -15,14 +15,18 @@ from .setup import HAFF_T, PhysicalSetup, build_problem, effective_modulus, phys
 __all__ = ["build_problem", "solve", "PhysicalSetup", "physical_setup", "EquilibriumError", "REFERENCE_CASE", "reference_config", "HAFF_T", "effective_modulus"]
 
 #: The paper's normalisation point of the relative removal rate (Figs. 11-12) with its base
-#: load and speed (Table 1).
-REFERENCE_CASE = {"particle_diameter": 100e-9, "pad_roughness": 15e-6, "applied_pressure": "4 psi", "rotation_speed": "60 rpm"}
+#: load and speed (Table 1). The pad roughness of the reference case is the configuration's
+#: ``reference_roughness`` (15 um in the paper preset, as in the paper; the measured 5 um of
+#: the default pad otherwise), see :func:`reference_config`.
+REFERENCE_CASE = {"particle_diameter": 100e-9, "applied_pressure": "4 psi", "rotation_speed": "60 rpm"}
 _REFERENCE_CACHE: dict[tuple, float] = {}
 
 
 def reference_config(config: Config) -> Config:
-    """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE`, every other input equal."""
-    return config.replace(model="lep", **REFERENCE_CASE)
+    """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE` with the pad at its
+    ``reference_roughness``, every other input equal (the paper's d = 100 nm, sigma = 15 um, 4 psi,
+    60 rpm in the paper preset)."""
+    return config.replace(model="lep", pad_roughness=config.reference_roughness, **REFERENCE_CASE)
 
 
 def _reference_removal_rate(ref: Config) -> float:
