@@ -61,9 +61,11 @@ def test_fields_are_on_the_wafer_with_units_and_nan_outside():
         assert np.all(np.isnan(v[outside])) and np.all(np.isfinite(v[~outside])), name
         assert "units" in ds[name].attrs
     assert ds.x.attrs["units"] == "m"
-    # the map reproduces the analytic centre film thickness and the wafer-mean contact ratio
+    # the map reproduces the analytic centre film thickness and the wafer-mean contact ratios
     n = len(ds.x) // 2
     assert ds.film_thickness.values[n, n] == pytest.approx(r.film_thickness_center_m, rel=1e-9)
+    for kind in ("elastic", "elastoplastic"):  # pixel mean over the disk vs the area integral on the polar grid
+        assert np.nanmean(ds[f"area_ratio_{kind}"].values) == pytest.approx(r.scalars[f"contact_area_ratio_{kind}"], rel=1e-2), kind
 
 
 def test_to_netcdf_round_trips_fields_and_scalars(tmp_path):
@@ -96,11 +98,17 @@ def test_provenance_names_model_version_and_every_parameter_with_its_source():
     assert all(p["source"] for p in prov["parameters"].values())
 
 
-def test_summary_lists_every_scalar_with_a_unit():
+def test_summary_lists_every_scalar_with_its_display_unit():
+    import re
+
+    from cmpsim.result import SCALARS
+
     r = cmpsim.solve(grid="coarse")
-    text = r.summary()
+    lines = r.summary().splitlines()
     for key in r.scalars:
-        assert key in text
+        line = next(ln for ln in lines if ln.split()[:1] == [key])
+        name, value, unit, *_ = re.split(r"\s{2,}", line.strip())
+        assert unit == SCALARS[key][2], key
 
 
 def test_field_maps_keep_the_solver_identities_up_to_the_rim():

@@ -31,10 +31,25 @@ def test_run_json_equals_python_api():
     assert json.loads(res.stdout) == json.loads(api.to_json())
 
 
-def test_run_table_shows_units():
-    res = CliRunner().invoke(main, ["run", "--set", "grid=coarse"])
-    assert res.exit_code == 0
-    assert "um" in res.output and "nm/min" in res.output and "rad" in res.output
+def test_run_table_gives_every_output_its_unit_in_the_unit_column():
+    import re
+
+    import cmpsim
+
+    res = CliRunner(env={"COLUMNS": "250"}).invoke(main, ["run", "--set", "grid=coarse"])
+    assert res.exit_code == 0, res.output
+
+    def cells(line):
+        return [c.strip() for c in re.split(r"[│┃]", line)[1:-1]]
+
+    lines = res.output.splitlines()
+    column = cells(next(ln for ln in lines if ln.startswith("┃")))
+    assert "unit" in column, column
+    rows = {c[0]: c for c in map(cells, lines) if c and c[0]}
+    expected = cmpsim.solve(grid="coarse").summary_rows()
+    for name, _, unit, _ in expected:
+        assert rows[name][column.index("unit")] == unit, name
+    assert {"um", "nm/min", "rad"} <= {unit for _, _, unit, _ in expected}
 
 
 @pytest.mark.parametrize(

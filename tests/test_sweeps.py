@@ -102,6 +102,7 @@ def test_sweep_through_cli_and_api_equals_looping_cmpsim_run(tmp_path):
     assert (cli["start"].values == "warm").sum() == 2  # the second point of each chain
 
 
+@pytest.mark.slow
 def test_two_worker_local_cluster_equals_serial_run(tmp_path):
     text = SMALL.replace('num = 2', 'num = 3') + '\n[[points]]\napplied_pressure = "1000psi"\n'
     spec = SweepSpec.from_mapping(tomllib.loads(text))
@@ -112,6 +113,7 @@ def test_two_worker_local_cluster_equals_serial_run(tmp_path):
     assert (serial["start"].values == "warm").sum() == 4
 
 
+@pytest.mark.slow
 def test_dask_scheduler_address_runs_the_same_sweep(tmp_path):
     from distributed import LocalCluster
 
@@ -150,6 +152,7 @@ def wait_for_parts(parts: Path, k: int, proc, timeout: float = 300.0) -> None:
         time.sleep(0.05)
 
 
+@pytest.mark.slow
 def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path):
     path = write(tmp_path, KILL)
     out = tmp_path / "killed.nc"
@@ -188,6 +191,7 @@ def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path)
     assert (resumed["status"].values == "ok").all() and resumed["status"].size == 24
 
 
+@pytest.mark.slow
 def test_ctrl_c_saves_the_finished_points_and_exits_130_without_worker_tracebacks(tmp_path):
     path = write(tmp_path, KILL)
     out = tmp_path / "int.nc"
