@@ -26,7 +26,7 @@ def _reference_removal_rate(config: Config) -> float:
     if key not in _REFERENCE_CACHE:
         if len(_REFERENCE_CACHE) > 256:
             _REFERENCE_CACHE.clear()
-        _REFERENCE_CACHE[key] = solve(ref, relative=False).removal_rate
+        _REFERENCE_CACHE[key] = solve(ref, relative=False).scalars["removal_rate_mean"]
     return _REFERENCE_CACHE[key]
 
 
@@ -67,13 +67,13 @@ def solve(config: Config | None = None, start=None, relative: bool = True, check
     setup = physical_setup(config)
     problem = build_problem(config, setup)
     sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
-    scalars, polar = evaluate_outputs(config, setup, problem, sol)
+    scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
     if relative:
-        scalars["removal_rate_relative"] = scalars["removal_rate"] / _reference_removal_rate(config)
+        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / _reference_removal_rate(config)
     scan = None
     if check_roots:
         scan = scan_moment_roots(problem, sol)
         scalars["moment_roots_found"] = len(scan.roots)
-    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol)
+    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol, profiles=profiles)
     result.root_scan = scan
     return result

@@ -600,7 +600,7 @@ def _solve_all(base: Config, progress: bool) -> tuple[RunData, int, int, list[st
             res, msg = get(cfg, start)
             if res is not None:
                 start = res.solution.state.u
-                scalars = dict(res.scalars)
+                scalars = res.to_schema1()  # the figures keep the 0.1 names until the rename of the studies
             else:
                 scalars = None
                 failures.append(f"{CURVES[c].label}, {x:g} {_UNITS[sweep]}: {msg}")
@@ -608,7 +608,7 @@ def _solve_all(base: Config, progress: bool) -> tuple[RunData, int, int, list[st
         ref, msg = get(ref_cfg, None)
     solve_s = time.perf_counter() - t0
     # relative removal rate: normalised by the paper's reference case with the other inputs equal
-    ref_rr = ref.scalars["removal_rate"] if ref is not None else float("nan")
+    ref_rr = ref.scalars["removal_rate_mean"] if ref is not None else float("nan")
     for pts in data.curves.values():
         for p in pts:
             if p.scalars is not None:

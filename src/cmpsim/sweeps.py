@@ -580,7 +580,7 @@ def _run_point(task: dict, prev=None, prev2=None) -> dict:
             except Exception as exc2:
                 rec.update(status="failed", error=message(exc2), start="cold-retry")
     if result is not None:
-        rec["scalars"] = result.to_dict()
+        rec["scalars"] = dict(result.scalars)
         rec["u"] = [float(v) for v in result.solution.state.u]
     rec["elapsed_s"] = time.perf_counter() - t0
     return rec
