@@ -33,11 +33,11 @@ def naive_count() -> int:
 
 
 def run(grid: str, cold: bool = False):
-    import cmpsim.validation as v
+    import cmpsim.studies as v  # the study runner: every point of the run goes through its solve_point
 
     original = v.solve_point
     if cold:
-        v.solve_point = lambda config, start=None, relative=False: original(config, None, relative)
+        v.solve_point = lambda config, start=None, **options: original(config, None, **options)
     try:
         with tempfile.TemporaryDirectory() as tmp:
             t = time.perf_counter()

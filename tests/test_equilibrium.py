@@ -193,3 +193,55 @@ def test_a_diverging_trial_film_in_the_hydrodynamic_start_is_not_reported_as_bad
 
         data = json.loads(res.stdout)
         assert data["solver"]["converged"] and abs(data["solver"]["load_residual"]) < 1e-6
+
+
+# ---------------------------------------------------------------- Newtonian slurry with cavitation
+NEWTONIAN_CASES = [("none", "-98.2 kPa"), ("gumbel", "-98.2 kPa"), ("jfo", "-98.2 kPa"), ("gumbel", "0 kPa"), ("jfo", "0 kPa")]
+
+
+@pytest.mark.parametrize("cavitation,p_cav", NEWTONIAN_CASES)
+def test_newtonian_equilibrium_converges_at_the_base_case_with_each_cavitation_model(cavitation, p_cav):
+    r = cmpsim.solve(slurry_model="newtonian", cavitation=cavitation, cavitation_pressure=p_cav, relative=False)
+    st = r.solution.state
+    print(f"\n{cavitation} p_cav={p_cav}: fluid {100 * r.fluid_load_fraction:.3f} %, centre film "
+          f"{r.film_thickness_center * 1e6:.4f} um, attack {r.attack_angle:.4g} rad, {r.iterations} Newton steps, "
+          f"{r.factorizations} solves, cavitated cells {0 if st.cavitated is None else int(st.cavitated.sum())}")
+    assert r.converged and abs(r.load_residual) < 1e-9 and r.moment_residual < 1e-9
+    assert r.iterations <= 8
+    if p_cav == "0 kPa":  # the ambient cavitation pressure is reached under the wafer's diverging side
+        assert st.cavitated.sum() > 50
+        assert st.p_slurry.min() == 0.0
+    if cavitation == "jfo":
+        assert ("fill_fraction" in r.polar) and r.polar["fill_fraction"].max() == 1.0
+
+
+@pytest.mark.parametrize("cavitation", ["none", "gumbel", "jfo"])
+def test_newton_jacobian_on_the_frozen_cavitated_set_matches_a_central_difference(cavitation):
+    cfg = cmpsim.Config.default().replace(slurry_model="newtonian", cavitation=cavitation, cavitation_pressure="0 kPa")
+    r = cmpsim.solve(cfg, relative=False)
+    problem, st = r.problem, r.solution.state
+    J = problem.jacobian(st)
+    for k in range(3):
+        du = np.zeros(3)
+        du[k] = 1e-4 * problem.u_scale[k]
+        plus, minus = problem.state(st.u + du), problem.state(st.u - du)
+        if st.cavitated is not None:  # the step keeps the cavitated set: the derivative is the frozen one
+            assert np.array_equal(plus.cavitated, st.cavitated) and np.array_equal(minus.cavitated, st.cavitated)
+        central = (plus.residual - minus.residual) / (2 * du[k])
+        assert np.abs(J[:, k] - central).max() < 1e-5 * np.abs(central).max(), (k, J[:, k], central)
+
+
+def test_newtonian_hydroplaning_equilibrium_is_found_from_an_attack_angle_scan():
+    """IC1000-like pad (sigma 5 um, R 7 um, H 50 MPa, E 0.5 GPa): the wafer hydroplanes. With full
+    Sommerfeld the zero-tilt film carries no net fluid load, Newton from the contact-only start
+    stalls near a sucked-down film, and the solver restarts from an attack-angle scan; it finds
+    the root that Gumbel cavitation (no cell below p_cav there) reaches directly."""
+    pad = dict(pad_modulus="0.5 GPa", pad_hardness="50 MPa", asperity_radius="7 um", pad_roughness="5 um",
+               reference_roughness="5 um", asperity_density=1e8, grid="12x32", max_iterations=12)
+    full = cmpsim.solve(slurry_model="newtonian", relative=False, **pad)
+    gumbel = cmpsim.solve(slurry_model="newtonian", cavitation="gumbel", relative=False, **pad)
+    assert full.converged and abs(full.load_residual) < 1e-9
+    assert full.fluid_load_fraction == pytest.approx(1.0, abs=1e-9)
+    assert not gumbel.solution.state.cavitated.any()
+    assert full.attack_angle == pytest.approx(gumbel.attack_angle, rel=1e-6)
+    assert full.film_thickness_center == pytest.approx(gumbel.film_thickness_center, rel=1e-8)

@@ -36,6 +36,7 @@ FIELDS = [
     "contact_area_ratio_elastic", "contact_area_ratio_elastoplastic", "contact_area_ratio_plastic",
     "normal_stress", "shear_stress", "removal_rate",
 ]
+OPTIONAL_FIELDS = ["fill_fraction"]
 #: CF / UDUNITS-2 spellings used by cmpsim.
 CF_UNITS = {"m", "Pa", "m s-1", "1", "rad"}
 
@@ -49,7 +50,7 @@ def base():
 def test_registry_holds_exactly_the_contract_names_in_si_without_units_in_names():
     assert outputs.value_names() == VALUES
     assert outputs.diagnostic_names() == SOLVER + ["moment_roots_found"]
-    assert outputs.field_names() == FIELDS
+    assert outputs.field_names() == FIELDS + OPTIONAL_FIELDS
     assert outputs.profile_names() == ["removal_rate_profile", "film_thickness_profile"]
     for o in outputs.OUTPUTS.values():
         assert o.unit in CF_UNITS, o.name

@@ -21,6 +21,7 @@ from click.testing import CliRunner
 import cmpsim
 from cmpsim.cli import main
 from cmpsim.config import PARAMETERS, Config, parse_value
+from cmpsim import outputs
 from cmpsim.result import SCALARS
 from cmpsim.sweeps import SweepError, SweepSpec, sweep
 
@@ -301,8 +302,8 @@ dome_height = ["5um", "50mm"]
         ("[axes]\napplied_presure = ['2psi']\n", "unknown setting 'applied_presure'"),
         ("[base]\nspeed = '60rpm'\n[axes]\napplied_pressure = ['2psi']\n", "unknown setting 'speed'"),
         ("[axis]\napplied_pressure = ['2psi']\n", "unknown key"),
-        ("[axes]\napplied_pressure = ['2 m', '3psi']\n", "wrong unit dimension"),
-        ("[axes]\nrotation_speed = {start = '30rpm', stop = '2psi', num = 3}\n", "wrong unit dimension"),
+        ("[axes]\napplied_pressure = ['2 m', '3psi']\n", "wrong dimension"),
+        ("[axes]\nrotation_speed = {start = '30rpm', stop = '2psi', num = 3}\n", "wrong dimension"),
         ("[axes]\napplied_pressure = []\n", "empty"),
         ("[axes]\napplied_pressure = {start = '2psi', stop = '6psi', num = 0}\n", "empty"),
         ("[axes]\napplied_pressure = {start = '2psi', stop = '6psi'}\n", "needs num"),
@@ -380,8 +381,14 @@ def test_output_file_holds_config_version_and_sweep_and_appears_atomically(tmp_p
     assert disk.attrs["cmpsim_version"] == cmpsim.__version__
     assert disk.attrs["sweep_toml"] == path.read_text()
     assert Config.from_mapping(tomllib.loads(disk.attrs["config_toml"])) == Config.default().replace(particle_diameter="200nm", grid="coarse")
+    assert disk.attrs["Conventions"] == "CF-1.11"
     for k in SCALARS:
-        assert k in disk.data_vars and disk[k].attrs["units"] == SCALARS[k][0]
+        o = outputs.scalar(k)
+        assert k in disk.data_vars and disk[k].attrs["long_name"] == o.long_name
+        if o.dtype == "bool":  # a CF flag
+            assert list(disk[k].attrs["flag_values"]) == [0, 1] and disk[k].attrs["flag_meanings"] == "not_converged converged"
+        else:
+            assert disk[k].attrs["units"] == SCALARS[k][0]
 
 
 def test_shipped_example_sweep_file_is_valid():

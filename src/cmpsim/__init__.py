@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 __all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "EquilibriumError", "__version__"]
 

@@ -28,6 +28,7 @@ from typing import Any, Callable
 import numpy as np
 
 from .config import PARAMETERS, Config, format_display, parse_value
+from .studies import solve_point, text_table
 from .validation import (
     Dataset,
     PointResult,
@@ -35,7 +36,6 @@ from .validation import (
     evaluate_dataset,
     model_value,
     point_config,
-    solve_point,
     solve_points,
 )
 
@@ -162,14 +162,12 @@ class CalibrationResult:
 
     def summary(self) -> str:
         """Plain-text report: fitted values, correlations, residuals, goodness of fit."""
-        from .validation import _text_table
-
-        out = [_text_table(self.PARAMETER_HEADER, self.parameter_rows()), ""]
+        out = [text_table(self.PARAMETER_HEADER, self.parameter_rows()), ""]
         if len(self.free) > 1:
             out.append("correlation matrix:")
-            out.append(_text_table([""] + self.free, [[n] + [f"{c:+.3f}" for c in row] for n, row in zip(self.free, self.correlation)]))
+            out.append(text_table([""] + self.free, [[n] + [f"{c:+.3f}" for c in row] for n, row in zip(self.free, self.correlation)]))
             out.append("")
-        out.append(_text_table(self.RESIDUAL_HEADER, self.residual_rows()))
+        out.append(text_table(self.RESIDUAL_HEADER, self.residual_rows()))
         out.append("")
         out.append(
             f"chi-square {self.chi2_before:.4g} -> {self.chi2_after:.4g} (dof {self.dof}, reduced {self.reduced_chi2:.3g}); "
@@ -530,9 +528,10 @@ def synthetic_dataset(
     w = csv.writer(buf)
     w.writerow(["dataset", "quantity", "value", "unit", "uncertainty", "comparison", *cond_cols, "source"])
     for p in points:
-        res, msg = solve_point(point_config(cfg, p))
-        if res is None:
-            raise CalibrationError(f"synthetic point {p} has no equilibrium: {msg}")
+        out = solve_point(point_config(cfg, p))
+        if not out.ok:
+            raise CalibrationError(f"synthetic point {p}: {out.error}")
+        res = out.result
         for q in quantities:
             v = model_value(res, q)
             sd = abs(v) * relative_noise

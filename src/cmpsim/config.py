@@ -13,9 +13,10 @@ import dataclasses
 import math
 import tomllib
 from dataclasses import dataclass
-from functools import lru_cache
 from pathlib import Path
 from typing import Any
+
+from . import units
 
 __all__ = [
     "Param",
@@ -67,6 +68,17 @@ class Param:
         unit = f" {self.unit}" if self.unit else ""
         return f"{lb}{lo}, {hi}{hb}{unit}"
 
+    def check(self, value: Any) -> Any:
+        """``value`` if valid (an SI number, or the text of a choice or grid); ``ValueError`` naming the range if not."""
+        if self.choices:
+            text = str(value).strip()
+            if text not in self.choices:
+                raise ValueError(f"{self.name} must be {self.range_text()}; got {value!r}")
+            return text
+        if self.unit == "grid":
+            return _parse_grid(value)
+        return _check_range(self, value)
+
     def display_range_text(self) -> str:
         """Human-readable valid range, in the display unit (``cmpsim params``)."""
         if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
@@ -97,6 +109,11 @@ PARAMETERS: dict[str, Param] = {
         _P("shear_power_coefficient", "process", "k_s", "1/Pa", "1/Pa", 2.5e-13, "Scale k_s of the shear-power removal law", "Scale only: k_s mu = 1e-13 1/Pa, the order of oxide Preston constants (Preston's k_p P U gives ~100 nm/min at 4 psi and 0.63 m/s); see docs/model.md", 0.0),
         _P("fluid_shear_weight", "process", "chi", "", "", 0.0, "Share chi of the slurry's shear power that removes material in the shear-power law", "docs/model.md ('Removal rate'): removal needs abrasive contact pressure, which the slurry's bulk shear does not give", 0.0, 1.0, False, False),
         _P("removal_shear", "process", "-", "choice", "", "total", "Shear stress tau of the removal law: slurry plus pad-summit friction, or slurry only (Runnels & Eyman)", "docs/model.md ('Removal rate')", choices=("total", "slurry")),
+        # ---------------------------------------------------------------- slurry
+        _P("slurry_model", "slurry", "-", "choice", "", "granular", "Slurry rheology: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (solved in p)", "docs/model.md ('Newtonian slurry and cavitation')", choices=("granular", "newtonian")),
+        _P("slurry_viscosity", "slurry", "eta", "Pa*s", "mPa*s", 5e-3, "Viscosity of the Newtonian slurry (slurry_model = 'newtonian')", "Thakurta et al., J. Electrochem. Soc. 148(4) G207 (2001), doi 10.1149/1.1355691: 0.005 Pa s; CMP slurries 1-30 mPa s (Lai, PhD MIT 2001: 0.03 Pa s); the range stops at 10 Pa s, far beyond any slurry", 0.0, 10.0, True, False),
+        _P("cavitation", "slurry", "-", "choice", "", "none", "Cavitation of the Newtonian slurry: none (full Sommerfeld), Gumbel (p -> max(p, p_cav)) or mass-conserving JFO; the granular slurry takes only 'none'", "docs/model.md ('Newtonian slurry and cavitation'); Elrod, J. Lubr. Technol. 103, 350 (1981); Giacopini et al., J. Tribol. 132, 041702 (2010)", choices=("none", "gumbel", "jfo")),
+        _P("cavitation_pressure", "slurry", "p_cav", "Pa", "kPa", -98.2e3, "Gauge pressure at which the Newtonian slurry cavitates (used by cavitation = 'gumbel' or 'jfo')", "Vapour pressure of water at 25 C (3.17 kPa, CRC Handbook) minus one atmosphere; consistent with the sub-ambient film pressures of tens of kPa measured by Shan, Levert, Meade, Tichy & Danyluk, J. Tribol. 122 (2000); see docs/model.md", -101325.0, 0.0, False, False),
         # ---------------------------------------------------------------- slurry (Haff grain flow)
         _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter (also < pad_roughness / 10: particles must fit in the roughness layer that forms the film)", "Paper Table 1 (100 nm; 200 nm studied); CMP abrasives are 10 nm - 1 um (Lai 2001 used up to 1 um alumina), so the range stops at 2 um", 0.0, 2e-6, True, False),
         _P("w_over_k", "slurry", "w/k", "", "", 4e-6, "Haff dissipation over conductivity constant", "Paper Table 1 (see docs/model.md on w/k vs k/w)", 0.0),
@@ -141,14 +158,6 @@ PRESETS: dict[str, dict[str, Any]] = {
         "removal_law": "paper",
     },
 }
-
-
-@lru_cache(maxsize=1)
-def _ureg():
-    import pint
-
-    ureg = pint.UnitRegistry()
-    return ureg
 
 
 def _check_range(p: Param, v: float) -> float:
@@ -202,42 +211,12 @@ def _parse_grid(value: Any) -> str:
 
 
 def parse_value(name: str, value: Any) -> Any:
-    """Convert one input to its SI value, checking unit dimension and range.
+    """Convert one input to its SI value, checking unit dimension and range (:func:`cmpsim.units.parse`).
 
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number
     (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
     """
-    if name not in PARAMETERS:
-        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
-    p = PARAMETERS[name]
-    if p.choices:
-        s = str(value).strip()
-        if s not in p.choices:
-            raise ValueError(f"{name} must be {p.range_text()}; got {value!r}")
-        return s
-    if p.unit == "grid":
-        return _parse_grid(value)
-    if isinstance(value, bool):
-        raise ValueError(f"{name} must be a number with units of {p.unit or 'none'}; got {value!r}")
-    if isinstance(value, (int, float)):
-        return _check_range(p, value)
-    # strings and quantities go through pint
-    ureg = _ureg()
-    try:
-        q = ureg.Quantity(value) if isinstance(value, str) else value
-    except Exception as exc:  # pint raises several error types for bad strings
-        raise ValueError(f"{name}: cannot read {value!r} as a quantity ({exc}); expected units of {p.unit or 'none (dimensionless)'}") from None
-    if not hasattr(q, "to"):
-        return _check_range(p, q)
-    target = p.unit or "dimensionless"
-    try:
-        si = q.to(target).magnitude
-    except Exception:
-        raise ValueError(
-            f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r}"
-            f" (e.g. {p.display or target})"
-        ) from None
-    return _check_range(p, float(si))
+    return units.parse(name, value)
 
 
 def _section_fields(section: str) -> list[str]:
@@ -389,16 +368,13 @@ class Config:
 
 
 def to_display(name: str, value: Any) -> Any:
-    """SI value of a parameter converted to its display unit (strings unchanged)."""
-    p = PARAMETERS[name]
-    if isinstance(value, str) or not p.display or p.display == p.unit:
-        return value
-    return _ureg().Quantity(value, p.unit).to(p.display).magnitude
+    """SI value of a parameter converted to its display unit (strings unchanged; :func:`cmpsim.units.to_display`)."""
+    return units.to_display(name, value)
 
 
 def format_display(name: str, value: Any) -> str:
-    v = to_display(name, value)
-    return v if isinstance(v, str) else f"{v:.6g}"
+    """SI value of a parameter as display text (:func:`cmpsim.units.format_display`)."""
+    return units.format_display(name, value)
 
 
 def parameter_table_markdown() -> str:

@@ -8,11 +8,15 @@ contact pressure from the asperity kernel. The three residuals are
     R_y = (integral of p x dA) / (P_applied A R_w)         (moment about the y axis)
     R_x = (integral of p y dA) / (P_applied A R_w)         (moment about the x axis)
 
-with p = (1 - a_r) (p_slurry - p0) + p_contact, the carrier pivot at the centre of the wafer
-face (so friction has no moment arm). They are driven to zero by Newton's method. The
+with p = (1 - a_r) p_g + p_contact, p_g the gauge pressure of the slurry (p_slurry - p0 for
+the granular slurry; for the Newtonian one p, max(p, p_cav) with Gumbel cavitation, the JFO
+pressure >= p_cav), the carrier pivot at the centre of the wafer face (so friction has no
+moment arm). They are driven to zero by Newton's method. The
 Jacobian comes from the same discrete system, dphi/du = -A^-1 d(A phi - b)/du, where the
 derivative of the residual at fixed phi is a cheap finite difference of the face
-coefficients: one LU factorisation per Newton step and three back-substitutions. Steps are
+coefficients: one LU factorisation per Newton step and three back-substitutions. With JFO
+cavitation the derivative is taken on the frozen cavitated set (the reduced system of
+:class:`cmpsim.cavitation.CavitationSystem`), with Gumbel on the frozen set where p > p_cav. Steps are
 limited to a trust region on the change of the film and safeguarded by a backtracking line
 search. The start is the contact-only equilibrium at zero tilt (or, without contact, a
 bracket of the fluid-only load).
@@ -25,14 +29,30 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
+from .cavitation import CAVITATION_MODELS, CavitationSystem
 from .contact import PadSurface, asperity_contact, contact_table
 from .geometry import film_thickness
 from .grid import PolarGrid
 from .reynolds import FaceCoefficients, LubricationParameters, ReynoldsSystem, lubrication_coefficients
 
-__all__ = ["WaferProblem", "PressureState", "EquilibriumSolution", "EquilibriumError", "solve_equilibrium", "balance_load", "scan_moment_roots", "RootScan", "MODEL_VARIANTS"]
+__all__ = [
+    "WaferProblem",
+    "PressureState",
+    "EquilibriumSolution",
+    "EquilibriumError",
+    "solve_equilibrium",
+    "balance_load",
+    "scan_moment_roots",
+    "RootScan",
+    "MODEL_VARIANTS",
+    "VACUUM_GAUGE_PRESSURE",
+]
 
 MODEL_VARIANTS = ("lep", "elastic", "hydrodynamic")
+
+#: Gauge pressure of absolute vacuum, Pa (one standard atmosphere below ambient): the lowest
+#: admissible cavitation pressure.
+VACUUM_GAUGE_PRESSURE = -101325.0
 
 
 class EquilibriumError(RuntimeError):
@@ -41,20 +61,29 @@ class EquilibriumError(RuntimeError):
 
 @dataclass
 class PressureState:
-    """Everything computed at one trial position u = (h0, theta, beta)."""
+    """Everything computed at one trial position u = (h0, theta, beta).
+
+    ``phi`` is the unknown of the discrete system: ln(p/p0) for the granular slurry, the gauge
+    pressure p (Pa) for the Newtonian one, and for JFO cavitation p (Pa) on the full-film
+    cells and 1 - theta on the cavitated ones. ``p_slurry`` is the absolute granular pressure
+    (granular) or the gauge pressure acting on the wafer (Newtonian: p, max(p, p_cav) with
+    Gumbel, the JFO p >= p_cav). ``p_fluid`` = (1 - a_r) times the gauge pressure.
+    """
 
     u: np.ndarray
     h: np.ndarray  # film thickness at cell centres, m
-    phi: np.ndarray  # ln(p / p0), cell centres
-    p_slurry: np.ndarray  # absolute granular pressure, Pa
-    p_fluid: np.ndarray  # (1 - a_r)(p - p0), Pa
+    phi: np.ndarray  # unknown of the discrete system (see above)
+    p_slurry: np.ndarray  # granular: absolute granular pressure; newtonian: gauge pressure acting, Pa
+    p_fluid: np.ndarray  # (1 - a_r) x gauge pressure, Pa
     p_contact: np.ndarray  # Pa
     area_elastic: np.ndarray
     area_elastoplastic: np.ndarray
     area_plastic: np.ndarray
     residual: np.ndarray  # (R_F, R_y, R_x)
-    system: ReynoldsSystem
+    system: ReynoldsSystem | CavitationSystem
     floored_fraction: float
+    fill_fraction: np.ndarray | None = None  # JFO: theta (1 on the full film); else None
+    cavitated: np.ndarray | None = None  # Gumbel / JFO: cells held at p_cav; else None
 
     @property
     def p_total(self) -> np.ndarray:
@@ -95,6 +124,14 @@ class WaferProblem:
     pad : PadSurface or None
         Asperity description; ``None`` only for the hydrodynamic variant.
     variant : {"lep", "elastic", "hydrodynamic"}
+    separation_offset : float
+        Subtracted from the film to give the summit separation, m.
+    cavitation : {"none", "gumbel", "jfo"}
+        Cavitation of the Newtonian slurry (``lubrication.slurry_model == "newtonian"``):
+        full Sommerfeld, Gumbel (acting pressure max(p, p_cav)) or mass-conserving JFO.
+        The granular slurry takes only "none" (its gauge pressure is bounded below by -p0).
+    cavitation_pressure : float, optional
+        p_cav, gauge, Pa, in [-101325, 0]; required unless ``cavitation == "none"``.
     """
 
     def __init__(
@@ -107,9 +144,12 @@ class WaferProblem:
         pad: PadSurface | None,
         variant: str = "lep",
         separation_offset: float = 0.0,
+        cavitation: str = "none",
+        cavitation_pressure: float | None = None,
     ):
         if variant not in MODEL_VARIANTS:
             raise ValueError(f"model must be one of {MODEL_VARIANTS}; got {variant!r}")
+        _check_cavitation(lubrication.slurry_model, cavitation, cavitation_pressure)
         if not (np.isfinite(applied_pressure) and applied_pressure > 0):
             raise ValueError(f"applied_pressure must be > 0 Pa; got {applied_pressure!r}")
         if not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
@@ -124,6 +164,10 @@ class WaferProblem:
         self.pad = pad
         self.variant = variant
         self.separation_offset = separation_offset
+        self.newtonian = lubrication.slurry_model == "newtonian"
+        self.cavitation = cavitation
+        self.p_cav = None if cavitation == "none" else float(cavitation_pressure)
+        self._last_cavitated = None
         self.sigma = lubrication.roughness.sigma
         R = grid.radius
         self.xc, self.yc = grid.centres
@@ -168,47 +212,86 @@ class WaferProblem:
         mx = g.integrate(p_total * self.yc) / (self.load_scale * g.radius)
         return np.array([f, my, mx])
 
-    def _combine(self, h, phi):
+    def _combine(self, h, phi, system=None, acting=None):
+        """Slurry and contact pressures of the unknown ``phi`` (see :class:`PressureState`).
+
+        ``acting`` (Gumbel only) freezes the set of cells whose own pressure acts (p > p_cav)
+        for the Jacobian. Returns (p_slurry, p_fluid, p_c, a_e, a_ep, a_p, theta, cavitated).
+        """
         pc, ae, aep, ap = self.contact(h)
         ar = ae + aep + ap
-        p_abs = self.p0 * np.exp(phi)
-        p_fluid = (1.0 - ar) * (p_abs - self.p0)
-        return p_abs, p_fluid, pc, ae, aep, ap
+        theta = cav = None
+        if not self.newtonian:
+            p_abs = self.p0 * np.exp(phi)
+            p_fluid = (1.0 - ar) * (p_abs - self.p0)
+            return p_abs, p_fluid, pc, ae, aep, ap, theta, cav
+        if self.cavitation == "jfo":
+            p, theta = system.fields(phi)
+            cav = system.cavitated.reshape(p.shape)
+        elif self.cavitation == "gumbel":
+            cav = phi <= self.p_cav if acting is None else ~acting
+            p = np.where(cav, self.p_cav, phi)
+        else:
+            p = phi
+        return p, (1.0 - ar) * p, pc, ae, aep, ap, theta, cav
+
+    def _system(self, coeffs, frozen: PressureState | None = None):
+        """The discrete slurry problem of these face coefficients (JFO: on ``frozen``'s set if given)."""
+        if self.cavitation == "jfo":
+            if frozen is not None:
+                return CavitationSystem(self.grid, coeffs, self.p_cav, cavitated=frozen.system.cavitated)
+            # start the active-set iteration from the last solved set (the solution does not depend on it)
+            system = CavitationSystem(self.grid, coeffs, self.p_cav, guess=self._last_cavitated)
+            self._last_cavitated = system.cavitated if system.cavitated.any() else None
+            return system
+        return ReynoldsSystem(self.grid, coeffs)
 
     def state(self, u) -> PressureState:
         """Solve the Reynolds equation and evaluate contact and residuals at position u."""
         u = np.asarray(u, dtype=float)
         h = self.film(u, self.xc, self.yc)
         coeffs = self.face_coefficients(u)
-        system = ReynoldsSystem(self.grid, coeffs)
+        system = self._system(coeffs)
         phi = system.solve()
-        self.factorizations += 1
-        if not np.all(np.isfinite(phi)) or phi.max() > 300.0:  # p > 1e130 p0: no physical state
+        self.factorizations += getattr(system, "iterations", 1)
+        if self.newtonian:
+            if not np.all(np.isfinite(phi)):
+                raise ValueError(
+                    f"the slurry pressure is not finite at a minimum film of {h.min() / self.sigma:.3g} sigma; flow "
+                    f"factors regularised on {100 * coeffs.floored / max(coeffs.n_faces, 1):.0f} % of the faces"
+                )
+        elif not np.all(np.isfinite(phi)) or phi.max() > 300.0:  # p > 1e130 p0: no physical state
             raise ValueError(
                 f"the slurry pressure diverges (ln(p/p0) up to {np.nanmax(phi):.3g}) at a minimum film of "
                 f"{h.min() / self.sigma:.3g} sigma; flow factors regularised on "
                 f"{100 * coeffs.floored / max(coeffs.n_faces, 1):.0f} % of the faces"
             )
-        p_abs, p_fluid, pc, ae, aep, ap = self._combine(h, phi)
+        p_abs, p_fluid, pc, ae, aep, ap, theta, cav = self._combine(h, phi, system)
         res = self._residual(p_fluid + pc)
         return PressureState(
-            u, h, phi, p_abs, p_fluid, pc, ae, aep, ap, res, system, coeffs.floored / max(coeffs.n_faces, 1)
+            u, h, phi, p_abs, p_fluid, pc, ae, aep, ap, res, system, coeffs.floored / max(coeffs.n_faces, 1), theta, cav
         )
 
     def jacobian(self, st: PressureState, rel_step: float = 1e-6) -> np.ndarray:
-        """d(residual)/du at a solved state: 3 coefficient re-evaluations, 3 back-substitutions."""
+        """d(residual)/du at a solved state: 3 coefficient re-evaluations, 3 back-substitutions.
+
+        With cavitation the derivative is the one on the frozen set of cavitated cells (JFO:
+        the reduced system of the state; Gumbel: the cells where p > p_cav), exact wherever
+        the set does not change under the perturbation.
+        """
         J = np.empty((3, 3))
         base = st.system.residual(st.phi)
+        acting = None if st.cavitated is None else ~st.cavitated
         for k in range(3):
             du = np.zeros(3)
             du[k] = rel_step * self.u_scale[k]
             u = st.u + du
             h = self.film(u, self.xc, self.yc)
-            pert = ReynoldsSystem(self.grid, self.face_coefficients(u))
+            pert = self._system(self.face_coefficients(u), frozen=st)
             dr = pert.residual(st.phi) - base
             dphi = -st.system.factor.solve(dr).reshape(st.phi.shape)
             self.back_substitutions += 1
-            _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi)
+            _, p_fluid, pc, *_ = self._combine(h, st.phi + dphi, st.system, acting)
             J[:, k] = (self._residual(p_fluid + pc) - st.residual) / du[k]
         return J
 
@@ -252,6 +335,26 @@ class WaferProblem:
                 return np.array([a + (b - a) * fa / (fa - fb), 0.0, 0.0])
         best = min(vals, key=lambda v: abs(v[1]))
         return np.array([best[0], 0.0, 0.0])
+
+
+def _check_cavitation(slurry_model: str, cavitation: str, cavitation_pressure) -> None:
+    """Refuse cavitation settings that do not apply, naming the parameter and its valid range."""
+    if cavitation not in CAVITATION_MODELS:
+        raise ValueError(f"cavitation must be one of {CAVITATION_MODELS}; got {cavitation!r}")
+    if cavitation == "none":
+        return
+    if slurry_model != "newtonian":
+        raise ValueError(
+            f"cavitation = {cavitation!r} applies to the Newtonian slurry only (slurry_model = 'newtonian'); with "
+            f"slurry_model = {slurry_model!r} the valid value is 'none': the granular slurry is solved in ln p, so its "
+            "gauge pressure cannot fall below -p0 (an implicit, speed-dependent cavitation pressure)"
+        )
+    p = cavitation_pressure
+    if p is None or not (np.isfinite(p) and VACUUM_GAUGE_PRESSURE <= p <= 0.0):
+        raise ValueError(
+            f"cavitation_pressure must be a gauge pressure in [{VACUUM_GAUGE_PRESSURE:g}, 0] Pa (no higher than ambient, "
+            f"no lower than vacuum); got {p!r}"
+        )
 
 
 def _merit(r: np.ndarray) -> float:
@@ -363,6 +466,59 @@ def solve_equilibrium(
         # first balance the load by bracketing h0, then let Newton do the rest
         u = balance_load(problem, u)
         st = problem.state(u)
+    try:
+        u, st, it, history = _newton(problem, u, st, tol, max_iter, max_step)
+    except EquilibriumError as first:
+        if not problem.newtonian:
+            raise
+        # A Newtonian film at zero tilt carries almost no net load (its pressure is nearly odd
+        # in x), so the contact-only start can sit in a basin of the merit function far from a
+        # lift-carried equilibrium. Restart once from the best point of an attack-angle scan.
+        try:
+            u = _tilt_scan_start(problem, u)
+            st = problem.state(u)
+            u, st, it, history = _newton(problem, u, st, tol, max_iter, max_step)
+        except (EquilibriumError, ValueError) as second:
+            raise EquilibriumError(f"{first}; a restart from an attack-angle scan failed too: {second}") from first
+    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+
+
+def _tilt_scan_start(problem: WaferProblem, u, n: int = 9) -> np.ndarray:
+    """Balance the load at ``n`` attack angles within the admissible range and return the point
+    where the moment about y changes sign (interpolated, in the bracket closest to balance;
+    else where it is smallest), cross tilt 0.
+
+    The range is +-0.9 (cutoff sigma + dome height) / R_w: tilting further would lower the
+    trailing edge through the layer where the pad carries load.
+    """
+    cutoff = problem.pad.height_cutoff if problem.pad is not None and np.isfinite(problem.pad.height_cutoff) else 3.0
+    layer = cutoff * problem.sigma + problem.dome_height
+    limit = 0.9 * layer / problem.grid.radius
+    thetas = np.linspace(-limit, limit, n)
+    points = []
+    for th in thetas:
+        try:
+            # bracket from above the contact layer: the thickest film that balances the load,
+            # not a thin one where the sub-ambient pressure of a full-Sommerfeld film sucks
+            # the wafer onto the pad
+            v = balance_load(problem, [u[0] + layer, th, 0.0])
+            points.append((th, v, problem.state(v).residual[1]))
+        except (EquilibriumError, ValueError):
+            continue
+    if not points:
+        raise EquilibriumError("no attack angle of the scan admits a load balance")
+    # of the sign changes, the one whose ends are closest to balance (the moment is steep and
+    # erratic around thin, sucked-down films)
+    brackets = [(max(abs(ma), abs(mb)), va, vb, ma, mb) for (_, va, ma), (_, vb, mb) in zip(points, points[1:]) if ma * mb <= 0 and ma != mb]
+    if brackets:
+        _, va, vb, ma, mb = min(brackets, key=lambda q: q[0])
+        w = ma / (ma - mb)
+        return (1 - w) * va + w * vb
+    return min(points, key=lambda q: abs(q[2]))[1]
+
+
+def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: int, max_step: float):
+    """The safeguarded Newton loop of :func:`solve_equilibrium`: (u, state, steps, history)."""
     history = [(u.copy(), st.residual.copy())]
     it = 0
     while _merit(st.residual) >= tol:
@@ -397,7 +553,7 @@ def solve_equilibrium(
             )
         u, st = trial, new
         history.append((u.copy(), st.residual.copy()))
-    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+    return u, st, it, history
 
 
 @dataclass

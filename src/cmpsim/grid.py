@@ -88,6 +88,14 @@ class PolarGrid:
         y = self.r * np.sin(tf)
         return x, y, np.full(x.shape, self.dr)
 
+    def rim(self, per_sector: int = 4) -> tuple[np.ndarray, np.ndarray]:
+        """Points (x, y) on the rim of the disk, ``per_sector`` per sector, m.
+
+        The film of a tilted, domed wafer is extreme on its rim, outside every cell centre.
+        """
+        t = np.linspace(0.0, 2.0 * np.pi, per_sector * self.n_theta, endpoint=False)
+        return self.radius * np.cos(t), self.radius * np.sin(t)
+
     def integrate(self, field) -> float:
         """Midpoint-rule integral of a cell field over the disk (second order), field unit x m^2."""
         return float(np.sum(np.asarray(field) * self.area))

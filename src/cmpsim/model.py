@@ -8,11 +8,11 @@ both call :func:`solve`.
 from __future__ import annotations
 
 from .config import Config
-from .equilibrium import EquilibriumError, scan_moment_roots, solve_equilibrium
+from .equilibrium import EquilibriumError, WaferProblem, scan_moment_roots, solve_equilibrium
 from .postprocess import evaluate_outputs
 from .setup import HAFF_T, PhysicalSetup, build_problem, effective_modulus, physical_setup
 
-__all__ = ["build_problem", "solve", "PhysicalSetup", "physical_setup", "EquilibriumError", "REFERENCE_CASE", "HAFF_T", "effective_modulus"]
+__all__ = ["build_problem", "solve", "PhysicalSetup", "physical_setup", "EquilibriumError", "REFERENCE_CASE", "reference_config", "HAFF_T", "effective_modulus"]
 
 #: The paper's normalisation point of the relative removal rate (Figs. 11-12) with its base
 #: load and speed (Table 1).
@@ -20,8 +20,13 @@ REFERENCE_CASE = {"particle_diameter": 100e-9, "pad_roughness": 15e-6, "applied_
 _REFERENCE_CACHE: dict[tuple, float] = {}
 
 
-def _reference_removal_rate(config: Config) -> float:
-    ref = config.replace(model="lep", **REFERENCE_CASE)
+def reference_config(config: Config) -> Config:
+    """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE`, every other input equal."""
+    return config.replace(model="lep", **REFERENCE_CASE)
+
+
+def _reference_removal_rate(ref: Config) -> float:
+    """Removal rate of the reference case ``ref``, solved from the cold start once per process."""
     key = tuple(sorted(ref.to_dict().items()))
     if key not in _REFERENCE_CACHE:
         if len(_REFERENCE_CACHE) > 256:
@@ -30,7 +35,15 @@ def _reference_removal_rate(config: Config) -> float:
     return _REFERENCE_CACHE[key]
 
 
-def solve(config: Config | None = None, start=None, relative: bool = True, check_roots: bool = False, **overrides):
+def solve(
+    config: Config | None = None,
+    start=None,
+    relative: bool = True,
+    check_roots: bool = False,
+    problem: WaferProblem | None = None,
+    reference_removal_rate: float | None = None,
+    **overrides,
+):
     """Solve one operating point and evaluate every output.
 
     Parameters
@@ -40,11 +53,18 @@ def solve(config: Config | None = None, start=None, relative: bool = True, check
     start : array_like, optional
         Initial (h0 [m], attack angle [rad], cross tilt [rad]) for Newton (warm start).
     relative : bool
-        Also solve the reference case (LEP model, d = 100 nm, sigma = 15 um, 4 psi, 60 rpm,
-        other inputs equal) for ``removal_rate_relative`` (cached).
+        Also give ``removal_rate_relative``: the removal rate over that of the reference case
+        (:func:`reference_config`: LEP model, d = 100 nm, sigma = 15 um, 4 psi, 60 rpm, other
+        inputs equal), solved from the cold start once per process unless given.
     check_roots : bool
         Also scan the attack angle for other moment roots (about 13 load balances); adds
         the scalar ``moment_roots_found`` and ``result.root_scan``.
+    problem : WaferProblem, optional
+        The problem of ``config`` if already built (:func:`build_problem`), e.g. by a sweep
+        that predicted its warm start from it; built here otherwise.
+    reference_removal_rate : float, optional
+        The removal rate of the reference case, when the caller has solved it (a study
+        shares its own solve, see :class:`cmpsim.studies.PointCache`).
     **overrides
         Inputs to change, by name (``applied_pressure="3 psi"``).
 
@@ -65,11 +85,16 @@ def solve(config: Config | None = None, start=None, relative: bool = True, check
     if overrides:
         config = config.replace(**overrides)
     setup = physical_setup(config)
-    problem = build_problem(config, setup)
+    if problem is None:
+        problem = build_problem(config, setup)
     sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
     scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
     if relative:
-        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / _reference_removal_rate(config)
+        if reference_removal_rate is None:
+            ref = reference_config(config)
+            same = ref.to_dict() == config.to_dict()  # the reference case itself: ratio 1
+            reference_removal_rate = scalars["removal_rate_mean"] if same else _reference_removal_rate(ref)
+        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
     scan = None
     if check_roots:
         scan = scan_moment_roots(problem, sol)

@@ -97,6 +97,11 @@ class Output:
         return self.name
 
     @property
+    def pint_unit(self) -> str:
+        """The SI unit in pint's spelling (``"m/s"`` for ``"m s-1"``, ``"dimensionless"`` for ``"1"``)."""
+        return {"m s-1": "m/s", "1": "dimensionless"}.get(self.unit, self.unit)
+
+    @property
     def cf_attrs(self) -> dict:
         """CF attributes: ``long_name``, ``units`` (or ``flag_values``/``flag_meanings``), ``cell_methods``."""
         attrs: dict = {"long_name": self.long_name}
@@ -128,11 +133,11 @@ _OUTPUT_LIST = [
     _O("contact_area_ratio_elastic", "value", "1", "elastic real contact area / wafer area", "%", 100.0, "wafer_mean", ("contact_area_ratio_elastic",), schema1="contact_area_ratio_elastic"),
     _O("contact_area_ratio_elastoplastic", "value", "1", "elastoplastic real contact area / wafer area", "%", 100.0, "wafer_mean", ("contact_area_ratio_elastoplastic",), schema1="contact_area_ratio_elastoplastic"),
     _O("contact_area_ratio_plastic", "value", "1", "plastic real contact area / wafer area", "%", 100.0, "wafer_mean", ("contact_area_ratio_plastic",), schema1="contact_area_ratio_plastic"),
-    _O("normal_stress_mean", "value", "Pa", "wafer-mean normal stress of the removal law: contact pressure plus the absolute granular pressure, ambient p0 included", "kPa", 1e-3, "wafer_mean", ("normal_stress",), schema1="mean_normal_stress_pa"),
+    _O("normal_stress_mean", "value", "Pa", "wafer-mean normal stress of the removal law: contact pressure plus the slurry pressure (granular: absolute, ambient p0 included)", "kPa", 1e-3, "wafer_mean", ("normal_stress",), schema1="mean_normal_stress_pa"),
     _O("shear_stress_mean", "value", "Pa", "wafer-mean shear stress magnitude tau on the wafer", "kPa", 1e-3, "wafer_mean", ("shear_stress",), schema1="mean_shear_stress_pa"),
     _O("removal_rate_mean", "value", "m s-1", "wafer-mean removal rate", "nm/min", 6e10, "wafer_mean", ("removal_rate",), schema1="removal_rate"),
     _O("removal_rate_relative", "value", "1", "wafer-mean removal rate / that of the reference case (LEP, 100 nm, 15 um, 4 psi, 60 rpm)", "1", 1.0, "reference_ratio", ("removal_rate_mean",), schema1="removal_rate_relative", optional=True),
-    _O("ambient_pressure", "value", "Pa", "ambient granular pressure p0 at the wafer edge", "kPa", 1e-3, "setup", schema1="ambient_pressure_pa"),
+    _O("ambient_pressure", "value", "Pa", "slurry pressure at the wafer edge: granular p0 (0 gauge for a Newtonian slurry)", "kPa", 1e-3, "setup", schema1="ambient_pressure_pa"),
     _O("sliding_speed", "value", "m s-1", "relative sliding speed at the wafer centre", "m/s", 1.0, "setup", schema1="sliding_speed_m_s"),
     _O("within_wafer_nonuniformity", "value", "1", "within-wafer non-uniformity of the removal rate: 1-sigma / mean of removal_rate_profile, edge excluded", "%", 100.0, "profile_std_over_mean", ("removal_rate_profile",)),
     _O("removal_rate_range", "value", "m s-1", "max - min of removal_rate_profile, edge excluded", "nm/min", 6e10, "profile_range", ("removal_rate_profile",)),
@@ -147,15 +152,16 @@ _OUTPUT_LIST = [
     # ------------------------------------------------------------------ fields (wafer maps)
     _O("film_thickness", "field", "m", "film thickness h (eq. 30)", "um", 1e6, "field"),
     _O("slurry_pressure", "field", "Pa", "slurry (granular) gauge pressure on the wafer, (1 - A_r/A_n)(p - p0)", "kPa", 1e-3, "field"),
-    _O("granular_pressure", "field", "Pa", "absolute granular pressure p (eq. 5 solved in ln p)", "kPa", 1e-3, "field"),
+    _O("granular_pressure", "field", "Pa", "slurry pressure of the removal law's normal stress: absolute granular pressure p (eq. 5), or the compressive gauge pressure of a Newtonian slurry", "kPa", 1e-3, "field"),
     _O("contact_pressure", "field", "Pa", "pad asperity contact pressure (eq. 28)", "kPa", 1e-3, "field"),
     _O("total_pressure", "field", "Pa", "slurry gauge pressure plus contact pressure", "kPa", 1e-3, "field"),
     _O("contact_area_ratio_elastic", "field", "1", "local elastic real contact area fraction", "%", 100.0, "field"),
     _O("contact_area_ratio_elastoplastic", "field", "1", "local elastoplastic real contact area fraction", "%", 100.0, "field"),
     _O("contact_area_ratio_plastic", "field", "1", "local plastic real contact area fraction", "%", 100.0, "field"),
-    _O("normal_stress", "field", "Pa", "normal stress sigma_n of the removal law, (1 - A_r/A_n) p + p_c (p absolute, including p0)", "kPa", 1e-3, "field"),
+    _O("normal_stress", "field", "Pa", "normal stress sigma_n of the removal law, (1 - A_r/A_n) p + p_c (granular p absolute, including p0)", "kPa", 1e-3, "field"),
     _O("shear_stress", "field", "Pa", "shear stress magnitude tau on the wafer", "kPa", 1e-3, "field"),
     _O("removal_rate", "field", "m s-1", "local removal rate", "nm/min", 6e10, "field"),
+    _O("fill_fraction", "field", "1", "fill fraction of the film (JFO cavitation of a Newtonian slurry; 1 = full film)", "%", 100.0, "field", optional=True),
     # ------------------------------------------------------------------ profiles (rotation averages)
     _O("radius", "coordinate", "m", "wafer radius of the ring centres, r_i = (i + 1/2) R_w / n_r", "mm", 1e3, "field"),
     _O("removal_rate_profile", "profile", "m s-1", "rotation-averaged removal rate: mean of the fixed-frame removal-rate map along the circle of radius r", "nm/min", 6e10, "ring_mean", ("removal_rate",)),

@@ -15,7 +15,8 @@ from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
 from .flowfactors import shear_stress_factors
 from .grainflow import grain_coefficients
-from .removal import contact_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
+from .removal import contact_shear_stress, newtonian_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
+from .reynolds import NEWTONIAN_GRAIN_COEFFICIENT
 from .setup import PhysicalSetup
 
 __all__ = ["evaluate_outputs", "reduce_outputs"]
@@ -31,22 +32,34 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     lub = setup.lubrication
     xc, yc = problem.xc, problem.yc
     # shear stress and removal rate
-    grad_phi = g.gradient(st.phi, 0.0)
-    grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
-    _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
-    phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
     _, _, dux, duy = setup.kinematics.mean_and_relative(xc, yc)
     ar = st.area_ratio
-    tsx, tsy = slurry_shear_stress(
-        st.p_slurry, grad_p, st.h, (dux, duy), lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a, phi_fs, phi_fp
-    )
+    newtonian = lub.slurry_model == "newtonian"
+    if newtonian:
+        # p_slurry is the gauge pressure acting on the wafer; the normal stress of the paper's
+        # removal law takes its compressive part (docs/model.md, "Newtonian slurry and cavitation")
+        grad_p = g.gradient(st.p_slurry, 0.0)
+        f = np.full(st.h.shape, NEWTONIAN_GRAIN_COEFFICIENT)
+        phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
+        theta = 1.0 if st.fill_fraction is None else st.fill_fraction
+        tsx, tsy = newtonian_shear_stress(grad_p, st.h, (dux, duy), lub.viscosity, phi_fs, phi_fp, theta)
+        p_normal = np.maximum(st.p_slurry, 0.0)
+    else:
+        grad_phi = g.gradient(st.phi, 0.0)
+        grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
+        _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
+        phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
+        tsx, tsy = slurry_shear_stress(
+            st.p_slurry, grad_p, st.h, (dux, duy), lub.particle_diameter, lub.fluctuation_velocity, lub.t_over_a, phi_fs, phi_fp
+        )
+        p_normal = st.p_slurry
     tau_x = (1.0 - ar) * tsx
     tau_y = (1.0 - ar) * tsy
     if config.removal_shear == "total":
         tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
         tau_x, tau_y = tau_x + tcx, tau_y + tcy
     tau = np.hypot(tau_x, tau_y)
-    sigma_n = (1.0 - ar) * st.p_slurry + st.p_contact
+    sigma_n = (1.0 - ar) * p_normal + st.p_contact
     if config.removal_law == "shear_power":
         rr = shear_power_removal_rate(
             st.p_contact, np.hypot((1.0 - ar) * tsx, (1.0 - ar) * tsy), np.hypot(dux, duy),
@@ -56,12 +69,11 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
     # film thickness: centre, and minimum over the cell centres and the rim
     u = st.u
-    rim_t = np.linspace(0.0, 2.0 * np.pi, 4 * g.n_theta, endpoint=False)
-    h_rim = problem.film(u, g.radius * np.cos(rim_t), g.radius * np.sin(rim_t))
+    h_rim = problem.film(u, *g.rim())
     polar = {
         "film_thickness": st.h,
         "slurry_pressure": st.p_fluid,
-        "granular_pressure": st.p_slurry,
+        "granular_pressure": p_normal,
         "contact_pressure": st.p_contact,
         "total_pressure": st.p_total,
         "contact_area_ratio_elastic": st.area_elastic,
@@ -71,6 +83,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "shear_stress": tau,
         "removal_rate": rr,
     }
+    if st.fill_fraction is not None:
+        polar["fill_fraction"] = st.fill_fraction
     # the outputs that are not a reduction of a field; the rest follow from the registry
     explicit = {
         "film_thickness_center": float(problem.film(u, 0.0, 0.0)),
@@ -78,7 +92,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "h0": float(u[0]),
         "attack_angle": float(u[1]),
         "cross_tilt": float(u[2]),
-        "ambient_pressure": setup.ambient_pressure,
+        # the slurry pressure at the wafer edge: p0 (granular), ambient = 0 gauge (Newtonian)
+        "ambient_pressure": 0.0 if newtonian else setup.ambient_pressure,
         "sliding_speed": setup.kinematics.sliding_speed,
         "load_residual": float(st.residual[0]),
         "moment_residual": float(max(abs(st.residual[1]), abs(st.residual[2]))),

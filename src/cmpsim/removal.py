@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["slurry_shear_stress", "contact_shear_stress", "removal_rate", "shear_power_removal_rate", "REMOVAL_LAWS"]
+__all__ = ["slurry_shear_stress", "newtonian_shear_stress", "viscous_shear_stress", "contact_shear_stress", "removal_rate", "shear_power_removal_rate", "REMOVAL_LAWS"]
 
 #: Removal laws: the paper's (Runnels–Eyman) and the shear-power law.
 REMOVAL_LAWS = ("paper", "shear_power")
@@ -44,9 +44,49 @@ def slurry_shear_stress(p_abs, grad_p, h, du, particle_diameter, fluctuation_vel
     (tau_x, tau_y) : tuple of arrays, Pa (the drag of the slurry on the wafer).
     """
     eta = np.asarray(p_abs) * particle_diameter / (t_over_a * fluctuation_velocity)
+    return viscous_shear_stress(eta, grad_p, h, du, phi_fs, phi_fp)
+
+
+def viscous_shear_stress(eta, grad_p, h, du, phi_fs, phi_fp):
+    """Patir–Cheng average shear stress on the wafer, eta du/h (1 + Phi_fs) - Phi_fp (h/2) grad p, Pa.
+
+    ``eta`` is the viscosity of the Couette term (Pa s, scalar or array), ``grad_p`` (Pa/m),
+    ``h`` (m), ``du`` = u_pad - u_wafer (m/s), ``phi_fs``, ``phi_fp`` the shear-stress factors
+    (eq. 14-15). Returns (tau_x, tau_y).
+    """
     couette = eta / h * (1.0 + phi_fs)
     half = 0.5 * phi_fp * h
     return couette * du[0] - half * grad_p[0], couette * du[1] - half * grad_p[1]
+
+
+def newtonian_shear_stress(grad_p, h, du, viscosity, phi_fs, phi_fp, fill_fraction=1.0):
+    """Average shear stress of the Newtonian slurry on the wafer (Patir & Cheng 1979), Pa.
+
+    tau = theta eta du / h (1 + Phi_fs) - Phi_fp (h/2) grad p. In a JFO-cavitated region the
+    gap holds liquid streamers over a share theta (``fill_fraction``) of its width and gas
+    elsewhere, which carries no shear: the Couette shear is weighted by theta (the pressure
+    gradient vanishes there). theta = 1 on the full film and without cavitation.
+
+    Parameters
+    ----------
+    grad_p : tuple of arrays
+        Gradient of the gauge pressure acting on the wafer, Pa/m.
+    h : array
+        Film thickness, m.
+    du : tuple of arrays
+        u_pad - u_wafer, m/s.
+    viscosity : float
+        eta, Pa s.
+    phi_fs, phi_fp : array
+        Shear-stress factors (eq. 14-15 at f = 3), dimensionless.
+    fill_fraction : float or array
+        theta, in (0, 1].
+
+    Returns
+    -------
+    (tau_x, tau_y) : tuple of arrays, Pa.
+    """
+    return viscous_shear_stress(viscosity * np.asarray(fill_fraction, dtype=float), grad_p, h, du, phi_fs, phi_fp)
 
 
 def contact_shear_stress(p_contact, du, friction_coefficient):

@@ -257,6 +257,10 @@ class Result:
         v = np.concatenate([centre, v, edge], axis=0)
         return RegularGridInterpolator((r, t), v, bounds_error=False, fill_value=None)
 
+    def _field_names(self) -> list[str]:
+        """The fields of this result: every field of the registry, the optional ones if solved."""
+        return [n for n in FIELDS if not _reg.field(n).optional or n in self.polar]
+
     def field_arrays(self, n: int | None = None) -> dict[str, Any]:
         """Wafer maps on an n x n Cartesian grid: {'x', 'y', name: array}, NaN outside the wafer."""
         from .contact import asperity_contact
@@ -286,9 +290,11 @@ class Result:
         # maps keep the identities of the solver (total = slurry + contact, ...)
         edges = {"slurry_pressure": 0.0, "granular_pressure": self.scalars["ambient_pressure"]}
         values = dict(exact)
-        for name in FIELDS:
+        for name in self._field_names():
             if name not in values and name not in ("total_pressure", "normal_stress"):
                 values[name] = self._polar_interpolator(self.polar[name], edges.get(name))(pts)
+        if "fill_fraction" in values:
+            values["fill_fraction"] = np.clip(values["fill_fraction"], 0.0, 1.0)
         if "contact_pressure" in values:
             a_r = values["contact_area_ratio_elastic"] + values["contact_area_ratio_elastoplastic"] + values["contact_area_ratio_plastic"]
             values["total_pressure"] = values["slurry_pressure"] + values["contact_pressure"]
@@ -296,7 +302,7 @@ class Result:
         else:
             values["total_pressure"] = values["slurry_pressure"]
             values["normal_stress"] = values["granular_pressure"]
-        for name in FIELDS:
+        for name in self._field_names():
             arr = np.full(X.shape, np.nan)
             arr[inside] = values[name]
             out[name] = arr
@@ -366,17 +372,14 @@ class Result:
     @property
     def dataset(self):
         """Maps, profiles and scalars (0-d variables) in one CF-1.11 ``xarray.Dataset``: what :meth:`to_netcdf` writes."""
-        import datetime
-
         import xarray as xr
 
         ds = xr.merge([self.fields, self.profile_dataset(), xr.Dataset(self.scalar_variables())], combine_attrs="override")
-        now = datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ")
         ds.attrs = {
             "Conventions": "CF-1.11",
             "title": f"cmpsim result: one operating point of chemical mechanical polishing (model {self.config.model!r})",
             "source": f"cmpsim {__version__}, model {self.config.model!r}, grid {self.grid.n_r}x{self.grid.n_theta}",
-            "history": f"{now} created by cmpsim {__version__} (cmpsim.solve / cmpsim run)",
+            "history": f"created by cmpsim {__version__} (cmpsim.solve / cmpsim run; no time stamp: the same inputs give the same file)",
             "references": "\n".join(REFERENCES),
             "comment": "Scalars are 0-d variables; a wafer mean whose map has the same name is stored as NAME_mean (attribute cmpsim_name). Inputs in SI in config_toml.",
             "cmpsim_version": __version__,

@@ -1,4 +1,4 @@
-"""Grain-flow average Reynolds equation (paper eq. 5) on the polar wafer grid.
+"""Average-flow Reynolds equation (paper eq. 5, and its Newtonian limit) on the polar wafer grid.
 
 In the form settled in ``docs/model.md`` (section "Reynolds equation"), with
 phi = ln(p / p0) and p0 the ambient granular pressure at the wafer edge,
@@ -11,6 +11,15 @@ phi = ln(p / p0) and p0 the ambient granular pressure at the wafer edge,
 with u_m the mean surface velocity and v the granular fluctuation velocity (constant B of
 eq. 5). The equation is linear in phi, so one sparse solve gives the pressure for a given
 film; the film enters only through the coefficients.
+
+The Newtonian slurry (``slurry_model="newtonian"``, ``docs/model.md`` section "Newtonian
+slurry and cavitation") is the same operator with the gauge pressure p (Pa) as unknown,
+
+    div( h^3/(12 eta) Phi^p grad p ) = div( q ),      p = 0 on r = R_w,
+
+and the flow factors at the Newtonian limit x = sqrt(w/k) h/d -> 0 of the grain-flow ones
+(f = g = 3). It is exactly the x -> 0 limit of D/p above with the Haff viscosity
+eta = (a/t) p d / v held constant, since Psi -> h/(2d).
 
 Discretisation: conservative cell-centred finite volumes on :class:`cmpsim.grid.PolarGrid`;
 two-point normal gradients, cross-gradient (off-diagonal tensor) terms from averaged central
@@ -34,19 +43,30 @@ from .grid import PolarGrid
 from .kinematics import Kinematics
 
 __all__ = [
+    "SLURRY_MODELS",
+    "NEWTONIAN_GRAIN_COEFFICIENT",
     "LubricationParameters",
     "FaceCoefficients",
     "lubrication_coefficients",
     "assemble_operator",
+    "face_fluxes",
     "flux_divergence",
     "ReynoldsSystem",
     "factorize",
 ]
 
 
+#: Slurry rheologies: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (in p).
+SLURRY_MODELS = ("granular", "newtonian")
+
+#: The grain-size coefficients f and g at x = sqrt(w/k) h/d -> 0 (eq. 18-19), used by the
+#: Newtonian slurry: isotropic roughness then gives Tripp's Phi^p = 1 - 1.5 (sigma/h)^2.
+NEWTONIAN_GRAIN_COEFFICIENT = 3.0
+
+
 @dataclass(frozen=True)
 class LubricationParameters:
-    """Inputs of the grain-flow Reynolds coefficients (all SI).
+    """Inputs of the Reynolds coefficients (all SI).
 
     Attributes
     ----------
@@ -62,6 +82,10 @@ class LubricationParameters:
     kinematics : Kinematics
     flow_factor_floor : float
         Smallest eigenvalue of Phi^p allowed to reach the solver, dimensionless (> 0).
+    slurry_model : {"granular", "newtonian"}
+        Haff grain flow (unknown ln(p/p0), the paper) or a Newtonian liquid (unknown: gauge p).
+    viscosity : float
+        Newtonian viscosity eta, Pa s (> 0); used only by the Newtonian slurry.
     """
 
     particle_diameter: float
@@ -71,6 +95,14 @@ class LubricationParameters:
     roughness: RoughnessGeometry
     kinematics: Kinematics
     flow_factor_floor: float = 0.05
+    slurry_model: str = "granular"
+    viscosity: float = 5e-3
+
+    def __post_init__(self) -> None:
+        if self.slurry_model not in SLURRY_MODELS:
+            raise ValueError(f"slurry_model must be one of {SLURRY_MODELS}; got {self.slurry_model!r}")
+        if not (np.isfinite(self.viscosity) and self.viscosity > 0):
+            raise ValueError(f"slurry_viscosity must be finite and > 0 Pa s (valid range: (0, inf)); got {self.viscosity!r}")
 
 
 @dataclass
@@ -90,20 +122,28 @@ class FaceCoefficients:
 def lubrication_coefficients(h, x, y, params: LubricationParameters):
     """Reynolds coefficients at points (x, y) with film thickness h (all m).
 
-    Returns ``(dxx, dxy, dyy, qx, qy, floored)``: D = (1/6)(t/a) v Psi h^2 Phi^p (m^3/s) with
-    the regularised pressure flow-factor tensor (eq. 8–10), the flux vector
-    q = u_m h + (sigma/2) Phi^s du (m^2/s, eq. 11–13) and the boolean mask of regularised
-    points. Raises ValueError if any film thickness is not finite and > 0.
+    Returns ``(dxx, dxy, dyy, qx, qy, floored)``: the diffusion tensor D with the regularised
+    pressure flow-factor tensor (eq. 8–10), the flux vector q = u_m h + (sigma/2) Phi^s du
+    (m^2/s, eq. 11–13) and the boolean mask of regularised points. For the granular slurry
+    D = (1/6)(t/a) v Psi h^2 Phi^p (m^3/s, multiplies grad ln p); for the Newtonian slurry
+    D = h^3/(12 eta) Phi^p (m^4/(Pa s), multiplies grad p) with f = g = 3 in the flow factors.
+    Raises ValueError if any film thickness is not finite and > 0.
     """
     h = np.asarray(h, dtype=float)
     if not np.all(np.isfinite(h)) or np.any(h <= 0):
         raise ValueError("film thickness must be finite and > 0 m everywhere on the wafer (the wafer touches the pad mean plane)")
     rough = params.roughness
-    psi, f, g = grain_coefficients(h / params.particle_diameter, params.w_over_k)
     hs = h / rough.sigma
+    if params.slurry_model == "newtonian":
+        f = g = np.full(h.shape, NEWTONIAN_GRAIN_COEFFICIENT)
+    else:
+        psi, f, g = grain_coefficients(h / params.particle_diameter, params.w_over_k)
     pxx, pxy, pyy = pressure_flow_factors(hs, f, g, rough)
     pxx, pxy, pyy, floored = regularize_pressure_tensor(pxx, pxy, pyy, params.flow_factor_floor)
-    c = params.t_over_a * params.fluctuation_velocity * psi * h * h / 6.0
+    if params.slurry_model == "newtonian":
+        c = h * h * h / (12.0 * params.viscosity)
+    else:
+        c = params.t_over_a * params.fluctuation_velocity * psi * h * h / 6.0
     sxx, sxy, syy = shear_flow_factors(hs, f, rough)
     umx, umy, dux, duy = params.kinematics.mean_and_relative(x, y)
     half_sigma = 0.5 * rough.sigma
@@ -201,8 +241,13 @@ def _to_csr(grid: PolarGrid, rows, cols, vals) -> sp.csr_matrix:
     return sp.csr_matrix((data, indices.copy(), indptr.copy()), shape=(grid.size, grid.size))
 
 
-def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
-    """Sum over the faces of each cell of the outward flux q . n L, m^3/s, shape (size,)."""
+def face_fluxes(grid: PolarGrid, coeffs: FaceCoefficients) -> tuple[np.ndarray, np.ndarray]:
+    """Integrated flux q . n L through each cell's faces, m^3/s, each of shape (n_r, n_theta).
+
+    Returns ``(fr, fa)``: ``fr[i, j]`` through the outer radial face of cell (i, j) (outward
+    from it; for the last ring, out of the wafer), ``fa[i, j]`` through its counter-clockwise
+    angular face (towards cell (i, j + 1)).
+    """
     n_t = grid.n_theta
     qx, qy = coeffs.radial[3:5]
     # integral of the outward normal over the arc r = r_f, |theta - theta_j| < dtheta/2 is
@@ -215,6 +260,12 @@ def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
     qx, qy = coeffs.angular[3:5]
     tf = (np.arange(n_t) + 1.0)[None, :] * grid.dtheta
     fa = (-qx * np.sin(tf) + qy * np.cos(tf)) * grid.dr  # through the ccw face of (i, j)
+    return fr, fa
+
+
+def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
+    """Sum over the faces of each cell of the outward flux q . n L, m^3/s, shape (size,)."""
+    fr, fa = face_fluxes(grid, coeffs)
     div = fr.copy()
     div[1:, :] -= fr[:-1, :]
     div += fa - np.roll(fa, 1, axis=1)

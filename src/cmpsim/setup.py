@@ -77,6 +77,8 @@ def physical_setup(config: Config) -> PhysicalSetup:
         roughness=rough,
         kinematics=kin,
         flow_factor_floor=c.flow_factor_floor,
+        slurry_model=c.slurry_model,
+        viscosity=c.slurry_viscosity,
     )
     p0 = float(granular_pressure(c.granular_density, c.particle_diameter, c.diameter_gap_ratio, v, t=HAFF_T))
     n_r, n_t = c.grid_shape
@@ -96,4 +98,6 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
         s.lubrication,
         s.pad,
         config.model,
+        cavitation=config.cavitation,
+        cavitation_pressure=config.cavitation_pressure,
     )

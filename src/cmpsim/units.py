@@ -1,0 +1,109 @@
+"""Units: the one place where a value with units becomes an SI float, and an SI float a display value.
+
+Inputs may be strings with units (``"4 psi"``, ``"60rpm"``, ``"100nm"``), pint Quantities, or
+plain numbers, which are taken as SI. Everything past this module carries SI floats.
+
+* :func:`parse`: an input of the parameter registry (:data:`cmpsim.config.PARAMETERS`) to its
+  SI value, checking the unit dimension and the valid range (``Config`` uses it for every
+  value it accepts; ``cmpsim.config.parse_value`` is this function).
+* :func:`to_display`: an SI value of a parameter in its display unit (tables, the CLI).
+* :func:`to_si` and :func:`convert`: any quantity given its unit (values of data files,
+  sliding speeds, sweep axes before their range is checked, the paper's psi and rpm grids).
+
+There is one pint registry (:func:`registry`), created on first use: ``import cmpsim`` does
+not import pint.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+__all__ = ["registry", "parse", "to_display", "format_display", "to_si", "convert", "unit_text"]
+
+#: Unit spellings found in data files that pint does not read as meant.
+ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
+
+
+@lru_cache(maxsize=1)
+def registry():
+    """The pint ``UnitRegistry`` of cmpsim (one per process)."""
+    import pint
+
+    return pint.UnitRegistry()
+
+
+def unit_text(text: str) -> str:
+    """A unit as written in a data file, in pint's spelling (``"%"`` -> ``"percent"``)."""
+    t = text.strip()
+    return ALIASES.get(t.lower(), t)
+
+
+def to_si(value: Any, unit: str, name: str = "value", example: str | None = None) -> float:
+    """``value`` as a float in ``unit`` (an SI unit, pint syntax; ``""`` for dimensionless).
+
+    ``value`` is a string with units, a pint Quantity, or a number (taken as already in
+    ``unit``). Raises ``ValueError`` naming ``name`` when the text is not a quantity or has
+    the wrong dimension (``example``: a unit to suggest, default ``unit``). No range check.
+    """
+    if isinstance(value, bool):
+        raise ValueError(f"{name} must be a number with units of {unit or 'none'}; got {value!r}")
+    if isinstance(value, (int, float)):
+        return float(value)
+    try:
+        q = registry().Quantity(value) if isinstance(value, str) else value
+    except Exception as exc:  # pint raises several error types for bad strings
+        raise ValueError(f"{name}: cannot read {value!r} as a quantity ({exc}); expected units of {unit or 'none (dimensionless)'}") from None
+    if not hasattr(q, "to"):
+        try:
+            return float(q)
+        except (TypeError, ValueError):
+            raise ValueError(f"{name} must be a number with units of {unit or 'none'}; got {value!r}") from None
+    target = unit or "dimensionless"
+    try:
+        return float(q.to(target).magnitude)
+    except Exception:
+        raise ValueError(
+            f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r} (e.g. {example or target})"
+        ) from None
+
+
+def convert(value: float, unit: str, to: str) -> float:
+    """``value`` given in ``unit`` expressed in ``to`` (both pint syntax or data-file spellings)."""
+    return float(registry().Quantity(float(value), unit_text(unit)).to(unit_text(to)).magnitude)
+
+
+def _param(name: str):
+    # the registry of inputs lives with the Config on the same floor (cmpsim.config)
+    from .config import PARAMETERS
+
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+    return PARAMETERS[name]
+
+
+def parse(name: str, value: Any) -> Any:
+    """The SI value of input ``name``, checking the unit dimension and the valid range.
+
+    ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number (taken
+    as SI, not re-parsed). Choices and the grid are strings, checked against their options.
+    Raises ``ValueError`` naming the parameter and its valid range.
+    """
+    p = _param(name)
+    if p.choices or p.unit == "grid" or (isinstance(value, (int, float)) and not isinstance(value, bool)):
+        return p.check(value)
+    return p.check(to_si(value, p.unit, name, example=p.display))
+
+
+def to_display(name: str, value: Any) -> Any:
+    """SI value of input ``name`` in its display unit (strings unchanged)."""
+    p = _param(name)
+    if isinstance(value, str) or not p.display or p.display == p.unit:
+        return value
+    return registry().Quantity(value, p.unit).to(p.display).magnitude
+
+
+def format_display(name: str, value: Any) -> str:
+    """SI value of input ``name`` as display text (6 significant digits)."""
+    v = to_display(name, value)
+    return v if isinstance(v, str) else f"{v:.6g}"

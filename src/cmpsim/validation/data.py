@@ -1,0 +1,344 @@
+"""Data sets: the CSV format, the measurable quantities and their units, reading and checking files.
+
+A data set is a CSV file (format in ``cmpsim/data/README.md``): a block of ``# key: value``
+comment lines with its citation and provenance, then one row per measured point with the
+quantity, value, unit, uncertainty, comparison mode, the operating conditions (columns named
+exactly as cmpsim parameters, values with units, or ``sliding_speed``) and a source note.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+
+from .. import outputs, units
+from ..config import PARAMETERS, Config
+
+__all__ = [
+    "QUANTITIES",
+    "QUANTITY_ALIASES",
+    "MEASURABLE_OUTPUTS",
+    "COMPARISONS",
+    "DataError",
+    "DataPoint",
+    "Dataset",
+    "load_dataset",
+    "load_datasets",
+    "shipped_dataset_paths",
+    "point_config",
+    "to_si",
+    "from_si",
+]
+
+#: Comparison modes of a data set (see the module docstring).
+COMPARISONS = ("absolute", "range", "order", "shape")
+#: Half-width, in decades, of the ``order`` comparison.
+ORDER_TOLERANCE_DECADES = 0.5
+#: Columns that are not operating conditions.
+META_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "comparison", "source", "label", "note")
+#: Extra condition columns (not cmpsim parameters) that are converted on reading.
+EXTRA_CONDITIONS = {"sliding_speed": "m/s"}
+
+
+def _film_max(result) -> float:
+    g = result.grid
+    rim = result.problem.film(result.solution.state.u, *g.rim())
+    return float(max(result.polar["film_thickness"].max(), rim.max()))
+
+
+def _friction(result) -> float:
+    """Friction coefficient: mean shear stress on the wafer over the applied pressure.
+
+    With ``removal_shear = "total"`` the model's mean shear stress already holds the slurry
+    shear and the summit friction; with ``"slurry"`` the summit friction mu * p_c is added
+    (magnitudes added: both act along the sliding direction to first order).
+    """
+    s = result.scalars
+    p = result.config.applied_pressure
+    mu = s["shear_stress_mean"] / p
+    if getattr(result.config, "removal_shear", "total") != "total":
+        mu += result.config.friction_coefficient * s["contact_load_fraction"]
+    return float(mu)
+
+
+#: The outputs of :mod:`cmpsim.outputs` that a data set may give (measurable results).
+MEASURABLE_OUTPUTS = (
+    "film_thickness_center",
+    "film_thickness_mean",
+    "film_thickness_min",
+    "attack_angle",
+    "fluid_load_fraction",
+    "contact_load_fraction",
+    "contact_area_ratio",
+    "contact_area_ratio_elastic",
+    "contact_area_ratio_elastoplastic",
+    "contact_area_ratio_plastic",
+    "normal_stress_mean",
+    "shear_stress_mean",
+    "removal_rate_mean",
+    "within_wafer_nonuniformity",
+    "removal_rate_range",
+)
+#: The 0.1 quantity names, still read: old name -> output name.
+QUANTITY_ALIASES = {"film_thickness": "film_thickness_center", "removal_rate": "removal_rate_mean"}
+
+
+def _from_registry(name: str) -> tuple[str, str, str, Callable[[Any], float]]:
+    o = outputs.scalar(name)
+    return (o.pint_unit, o.display_unit, o.long_name, lambda r: r.scalars[name])
+
+
+#: Measurable quantity -> (SI unit for pint, display unit for tables/plots, description, model
+#: extractor): the measurable outputs of the registry (:mod:`cmpsim.outputs`), their 0.1 names
+#: (``film_thickness`` = ``film_thickness_center``, ``removal_rate`` = ``removal_rate_mean``),
+#: and two quantities derived here (largest film, friction coefficient).
+QUANTITIES: dict[str, tuple[str, str, str, Callable[[Any], float]]] = {
+    **{name: _from_registry(name) for name in MEASURABLE_OUTPUTS},
+    **{old: _from_registry(new) for old, new in QUANTITY_ALIASES.items()},
+    "film_thickness_max": ("m", "um", "largest film thickness over the wafer", _film_max),
+    "friction_coefficient": ("dimensionless", "-", "wafer-mean shear stress (slurry + summit friction) / applied pressure", _friction),
+}
+
+
+class DataError(ValueError):
+    """A data file that cannot be read; the message names the file, line and problem."""
+
+
+def to_si(value: float, unit: str, quantity: str) -> float:
+    """``value`` in ``unit`` converted to the SI unit of ``quantity`` (ValueError if incompatible)."""
+    target = QUANTITIES[quantity][0]
+    try:
+        return units.convert(value, unit, target)
+    except Exception as exc:
+        raise ValueError(f"unit {unit!r} is not a unit of {quantity} (expected units convertible to {target!r}): {exc}") from None
+
+
+def from_si(value: float, unit: str, quantity: str) -> float:
+    """SI value of ``quantity`` expressed in ``unit``."""
+    if value is None or not np.isfinite(value):
+        return float("nan")
+    return units.convert(value, QUANTITIES[quantity][0], unit)
+
+
+# --------------------------------------------------------------------------- data model
+@dataclass
+class DataPoint:
+    """One measured (or, for a model-to-model data set, predicted) point."""
+
+    dataset: str
+    quantity: str
+    value: float  # as written, in ``unit``
+    unit: str
+    uncertainty: float | None  # as written, in ``unit`` (None = not given)
+    comparison: str
+    conditions: dict[str, str]  # column -> value text (cmpsim parameter names or sliding_speed)
+    source: str = ""
+    line: int = 0
+    label: str = ""
+
+    @property
+    def value_si(self) -> float:
+        return to_si(self.value, self.unit, self.quantity)
+
+    @property
+    def uncertainty_si(self) -> float | None:
+        if self.uncertainty is None:
+            return None
+        return to_si(self.uncertainty, self.unit, self.quantity) - to_si(0.0, self.unit, self.quantity)
+
+    def conditions_text(self) -> str:
+        return ", ".join(f"{k}={v}" for k, v in self.conditions.items()) or "(base case)"
+
+
+@dataclass
+class Dataset:
+    """The points of one data set with the metadata of its file header."""
+
+    name: str
+    points: list[DataPoint]
+    meta: dict[str, str] = field(default_factory=dict)
+    path: Path | None = None
+
+    @property
+    def kind(self) -> str:
+        """``measurement`` or ``model_prediction`` (a model-to-model comparison)."""
+        return self.meta.get("kind", "measurement")
+
+    @property
+    def comparison(self) -> str:
+        return self.points[0].comparison
+
+    @property
+    def quantity(self) -> str:
+        return ", ".join(sorted({p.quantity for p in self.points}))
+
+    @property
+    def citation(self) -> str:
+        return self.meta.get("citation", "")
+
+
+def shipped_dataset_paths() -> list[Path]:
+    """The CSV data sets shipped with the package, sorted by name."""
+    from importlib import resources
+
+    root = resources.files("cmpsim") / "data"
+    return sorted(Path(str(p)) for p in root.iterdir() if str(p).endswith(".csv"))
+
+
+def _parse_float(text: str, what: str, where: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise DataError(f"{where}: {what} {text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise DataError(f"{where}: {what} {text!r} is not finite")
+    return v
+
+
+def load_datasets(path) -> list[Dataset]:
+    """Read a data file; one :class:`Dataset` per distinct value of its ``dataset`` column.
+
+    Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
+    required column, unknown quantity, comparison or condition column, bad number or unit.
+    """
+    from ..io import read_text
+
+    path = Path(path)
+    text = read_text(path, "data file", DataError)
+    meta: dict[str, str] = {}
+    body_lines: list[tuple[int, str]] = []
+    for i, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s.startswith("#"):
+            content = s.lstrip("#").strip()
+            if ":" in content:
+                key, value = content.split(":", 1)
+                key = key.strip().lower()
+                if key and " " not in key:
+                    meta[key] = (meta[key] + " " + value.strip()) if key in meta else value.strip()
+            continue
+        if s:
+            body_lines.append((i, line))
+    if not body_lines:
+        raise DataError(f"{path}: no header row and no data rows (see cmpsim/data/README.md for the format)")
+    header_line, header_text = body_lines[0]
+    header = [h.strip() for h in next(csv.reader([header_text]))]
+    where0 = f"{path}:{header_line}"
+    for required in ("quantity", "value", "unit"):
+        if required not in header:
+            raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})")
+    if len(set(header)) != len(header):
+        raise DataError(f"{where0}: duplicate column names in the header")
+    for col in header:
+        if col in META_COLUMNS or col in EXTRA_CONDITIONS:
+            continue
+        if col not in PARAMETERS:
+            raise DataError(
+                f"{where0}: unknown column {col!r}: condition columns must be cmpsim parameter names "
+                f"(see `cmpsim params`) or {', '.join(EXTRA_CONDITIONS)}"
+            )
+        if PARAMETERS[col].section == "numerics" and col != "model":
+            raise DataError(f"{where0}: column {col!r} is a numerical setting, not an operating condition")
+    default_name = meta.get("dataset") or path.stem
+    default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,")
+    datasets: dict[str, Dataset] = {}
+    rows = csv.reader([t for _, t in body_lines[1:]])
+    for (lineno, _), row in zip(body_lines[1:], rows):
+        where = f"{path}:{lineno}"
+        if len(row) != len(header):
+            raise DataError(f"{where}: {len(row)} fields but the header has {len(header)}")
+        rec = {h: c.strip() for h, c in zip(header, row)}
+        quantity = rec["quantity"]
+        if quantity not in QUANTITIES:
+            raise DataError(f"{where}: unknown quantity {quantity!r}; known: {', '.join(QUANTITIES)}")
+        value = _parse_float(rec["value"], "value", where)
+        unit = rec["unit"]
+        unc_text = rec.get("uncertainty", "")
+        uncertainty = None
+        if unc_text:
+            uncertainty = _parse_float(unc_text, "uncertainty", where)
+            if uncertainty <= 0:
+                raise DataError(f"{where}: uncertainty must be > 0 (or empty); got {unc_text!r}")
+        comparison = rec.get("comparison") or default_comparison
+        if comparison not in COMPARISONS:
+            raise DataError(f"{where}: unknown comparison {comparison!r}; known: {', '.join(COMPARISONS)}")
+        if comparison == "range" and uncertainty is None:
+            raise DataError(f"{where}: comparison 'range' needs the half-width of the range in the uncertainty column")
+        if comparison in ("order", "shape") and value <= 0:
+            raise DataError(f"{where}: comparison {comparison!r} needs a positive value; got {value:g}")
+        try:
+            to_si(value, unit, quantity)
+        except ValueError as exc:
+            raise DataError(f"{where}: {exc}") from None
+        conditions = {}
+        for col in header:
+            if col in META_COLUMNS or not rec[col]:
+                continue
+            conditions[col] = rec[col]
+        try:
+            point_config(Config.default(), conditions)
+        except ValueError as exc:
+            raise DataError(f"{where}: {exc}") from None
+        name = rec.get("dataset") or default_name
+        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""))
+        ds = datasets.setdefault(name, Dataset(name, [], dict(meta), path))
+        ds.points.append(p)
+    if not datasets:
+        raise DataError(f"{path}: the file has a header but no data rows")
+    for ds in datasets.values():
+        modes = {p.comparison for p in ds.points}
+        if len(modes) > 1:
+            raise DataError(f"{path}: data set {ds.name!r} mixes comparison modes {sorted(modes)}; use one per data set")
+        if ds.comparison == "shape":
+            if len({p.quantity for p in ds.points}) > 1:
+                raise DataError(f"{path}: shape data set {ds.name!r} must hold one quantity")
+            if len(ds.points) < 2:
+                raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
+    return list(datasets.values())
+
+
+def load_dataset(path) -> Dataset:
+    """Read a data file holding one data set (see :func:`load_datasets` for several)."""
+    sets = load_datasets(path)
+    if len(sets) != 1:
+        raise DataError(f"{path}: holds {len(sets)} data sets ({', '.join(d.name for d in sets)}); use load_datasets()")
+    return sets[0]
+
+
+def _as_datasets(data) -> list[Dataset]:
+    if data is None:
+        data = shipped_dataset_paths()
+    if isinstance(data, (Dataset, str, Path)):
+        data = [data]
+    out: list[Dataset] = []
+    for item in data:
+        out.extend([item] if isinstance(item, Dataset) else load_datasets(item))
+    names = [d.name for d in out]
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise DataError(f"data set names must be unique; repeated: {', '.join(sorted(dup))}")
+    return out
+
+
+def point_config(base: Config, conditions: dict[str, str]) -> Config:
+    """The Config of one data point: ``base`` with the point's conditions.
+
+    ``sliding_speed`` becomes ``rotation_speed = sliding_speed / centre_distance`` (the
+    centre distance of the point, or of ``base``).
+    """
+    cond = dict(conditions)
+    sliding = cond.pop("sliding_speed", None)
+    cfg = base.replace(**cond) if cond else base
+    if sliding is not None:
+        if "rotation_speed" in cond:
+            raise ValueError("give either sliding_speed or rotation_speed, not both")
+        u = units.to_si(sliding, "m/s", "sliding_speed", example="m/s")
+        if not (u > 0 and math.isfinite(u)):
+            raise ValueError(f"sliding_speed must be > 0 m/s; got {sliding!r}")
+        cfg = cfg.replace(rotation_speed=u / cfg.centre_distance)
+    return cfg
