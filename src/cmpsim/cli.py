@@ -64,11 +64,12 @@ def main():
 @main.command()
 @click.argument("config", required=False, type=click.Path(dir_okay=False))
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units: --set applied_pressure=3psi (repeatable).")
-@click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, result.json and config.toml to DIR.")
+@click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout: schema 2, see cmpsim/data/result.schema.json.")
+@click.option("--schema", "schema", type=click.Choice(["1", "2"]), default="2", show_default=True, help="JSON layout of --json and result.json: 2, or the flat object of cmpsim 0.1 (deprecated).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, profile.png, result.json and config.toml to DIR.")
 @click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
 @click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
-def run(config, assignments, as_json, out_dir, check_roots, preset):
+def run(config, assignments, as_json, schema, out_dir, check_roots, preset):
     """Solve one operating point (the paper's base case by default).
 
     CONFIG is an optional TOML file (sections `[wafer]` `[process]` `[slurry]` `[pad]` `[numerics]`
@@ -87,21 +88,18 @@ def run(config, assignments, as_json, out_dir, check_roots, preset):
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
         _fail(str(exc))
+    schema = int(schema)
+    if schema == 1:
+        click.echo("cmpsim: warning: --schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)", err=True)
     if out_dir:
-        write_outputs(result, Path(out_dir))
+        write_outputs(result, Path(out_dir), schema=schema)
     if as_json:
-        click.echo(result.to_json())
+        click.echo(result.to_json(schema=schema))
         return
     from rich.console import Console
 
     console = Console()
-    console.print(
-        _rich_table(
-            f"cmpsim {cfg.model}: one operating point (grid {cfg.grid_shape[0]}x{cfg.grid_shape[1]})",
-            ["output", "value", "unit", "meaning"],
-            result.summary_rows(),
-        )
-    )
+    console.print(result.summary_table(console.width))
     if result.flow_factor_floored_fraction > 0:
         console.print(
             f"[yellow]warning: the flow-factor tensor was regularised on {100 * result.flow_factor_floored_fraction:.1f} % "
@@ -114,22 +112,22 @@ def run(config, assignments, as_json, out_dir, check_roots, preset):
             f"(at {roots} rad); the equilibrium above is the one Newton reached from the default start[/yellow]"
         )
     if out_dir:
-        console.print(f"wrote {out_dir}/fields.nc, maps.png, result.json, config.toml")
+        console.print(f"wrote {out_dir}/fields.nc, maps.png, profile.png, result.json, config.toml")
 
 
-def write_outputs(result, out: Path) -> None:
-    """fields.nc, maps.png, result.json, config.toml into ``out`` (each written atomically)."""
+def write_outputs(result, out: Path, schema: int = 2) -> None:
+    """fields.nc, maps.png, profile.png, result.json, config.toml into ``out`` (each written atomically)."""
+    import matplotlib.pyplot as plt
+
     from .io import atomic_path, atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
     result.to_netcdf(out / "fields.nc")
-    fig = result.plot()
-    with atomic_path(out / "maps.png", suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    atomic_write_text(out / "result.json", result.to_json(indent=2) + "\n")
+    for name, fig in (("maps.png", result.plot()), ("profile.png", result.plot_profiles())):
+        with atomic_path(out / name, suffix=".png") as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+        plt.close(fig)
+    atomic_write_text(out / "result.json", result.to_json(indent=2, schema=schema) + "\n")
     result.config.to_toml(out / "config.toml")
 
 
@@ -144,8 +142,18 @@ def params(markdown):
         return
     from rich.console import Console
 
-    rows = [(n, format_display(n, p.default), p.display or "-", p.range_text(), p.source) for n, p in PARAMETERS.items()]
-    Console().print(_rich_table("cmpsim inputs (set with --set NAME=VALUE)", ["name", "default", "unit", "valid range (SI)", "source"], rows))
+    from .tables import WIDE, legible_table
+
+    console = Console()
+    rows, detail = [], []
+    for n, p in PARAMETERS.items():
+        unit = p.display if p.unit not in ("choice", "grid") else ""
+        default = format_display(n, p.default) + (f" {unit}" if unit else "")
+        # narrow terminals: the default above its valid range, both in the display unit
+        rows.append((n, default, p.display_range_text()) if console.width >= WIDE else (n, f"{default}\n{p.display_range_text()}"))
+        detail.append(f"{p.description}. Source: {p.source}")
+    header = ["name", "default", "valid range"] if console.width >= WIDE else ["name", "default / valid range"]
+    console.print(legible_table("cmpsim inputs (set with --set NAME=VALUE)", header, rows, detail=detail, detail_header="meaning and source", width=console.width))
 
 
 # ---- sweep command (sweeps.py) ----

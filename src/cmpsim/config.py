@@ -79,6 +79,16 @@ class Param:
             return _parse_grid(value)
         return _check_range(self, value)
 
+    def display_range_text(self) -> str:
+        """Human-readable valid range, in the display unit (``cmpsim params``)."""
+        if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
+            return self.range_text()
+        lo = "-inf" if self.low is None else f"{to_display(self.name, self.low):.6g}"
+        hi = "inf" if self.high is None else f"{to_display(self.name, self.high):.6g}"
+        lb = "(" if (self.low is None or self.low_open) else "["
+        hb = ")" if (self.high is None or self.high_open) else "]"
+        return f"{lb}{lo}, {hi}{hb} {self.display}"
+
 
 _P = Param
 PARAMETERS: dict[str, Param] = {
@@ -87,6 +97,7 @@ PARAMETERS: dict[str, Param] = {
         # ---------------------------------------------------------------- wafer
         _P("wafer_diameter", "wafer", "2 R_w", "m", "in", 0.0762, "Wafer diameter", "Paper Table 1 (3 in)", 0.0),
         _P("dome_height", "wafer", "delta_d", "m", "um", 5e-6, "Dome height of the convex wafer (0 = flat)", "Paper Table 1", 0.0, None, False),
+        _P("edge_exclusion", "wafer", "EE", "m", "mm", 3e-3, "Metrology edge exclusion: the outer annulus left out of the within-wafer uniformity (also < wafer_diameter / 2)", "Wafer metrology convention: flatness and thickness are specified over a fixed quality area inside a nominal edge exclusion, 3 mm for 100-200 mm wafers (SEMI M1; SEMI MF1530), 2 mm and less for 300 mm (ITRS); see docs/model.md ('Within-wafer uniformity')", 0.0, None, False),
         # ---------------------------------------------------------------- process
         _P("applied_pressure", "process", "P", "Pa", "psi", 4 * 6894.757293168361, "Applied load over wafer area", "Paper Table 1 (4 psi; range 2-6 psi)", 0.0),
         _P("rotation_speed", "process", "Omega_p", "rad/s", "rpm", 2 * math.pi, "Pad (relative) rotation speed", "Paper Table 1 (60 rpm; range 30-90 rpm)", 0.0),
@@ -185,6 +196,12 @@ MAX_PARTICLE_ROUGHNESS_RATIO = 0.1
 
 def _check_consistency(c: "Config") -> None:
     """Refuse combinations of inputs that make the model meaningless, naming the parameters."""
+    radius = 0.5 * c.wafer.wafer_diameter
+    if c.wafer.edge_exclusion >= radius:
+        raise ValueError(
+            f"edge_exclusion = {c.wafer.edge_exclusion:g} m leaves no wafer (wafer_diameter = {c.wafer.wafer_diameter:g} m): "
+            f"valid range [0, {radius:g}) m, i.e. below the wafer radius"
+        )
     if c.pad.pad_compliance != "rigid" and c.numerics.model == "hydrodynamic":
         raise ValueError(
             f"pad_compliance = {c.pad.pad_compliance!r} needs a model with pad contact: model must be 'lep' or 'elastic' "

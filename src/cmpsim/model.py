@@ -35,7 +35,7 @@ def _reference_removal_rate(ref: Config) -> float:
     if key not in _REFERENCE_CACHE:
         if len(_REFERENCE_CACHE) > 256:
             _REFERENCE_CACHE.clear()
-        _REFERENCE_CACHE[key] = solve(ref, relative=False).removal_rate
+        _REFERENCE_CACHE[key] = solve(ref, relative=False).scalars["removal_rate_mean"]
     return _REFERENCE_CACHE[key]
 
 
@@ -92,17 +92,17 @@ def solve(
     if problem is None:
         problem = build_problem(config, setup)
     sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
-    scalars, polar = evaluate_outputs(config, setup, problem, sol)
+    scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
     if relative:
         if reference_removal_rate is None:
             ref = reference_config(config)
             same = ref.to_dict() == config.to_dict()  # the reference case itself: ratio 1
-            reference_removal_rate = scalars["removal_rate"] if same else _reference_removal_rate(ref)
-        scalars["removal_rate_relative"] = scalars["removal_rate"] / reference_removal_rate
+            reference_removal_rate = scalars["removal_rate_mean"] if same else _reference_removal_rate(ref)
+        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
     scan = None
     if check_roots:
         scan = scan_moment_roots(problem, sol)
         scalars["moment_roots_found"] = len(scan.roots)
-    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol)
+    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol, profiles=profiles)
     result.root_scan = scan
     return result
