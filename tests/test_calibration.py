@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
-from cmpsim.calibration import CalibrationError, calibrate, synthetic_dataset
+from cmpsim.calibration import CalibrationError, calibrate
 from cmpsim.cli import main
 from cmpsim.config import Config
+from cmpsim.testing import synthetic_dataset
 
 BASE = Config.default().replace(grid="coarse")
 POINTS = [{"applied_pressure": f"{p} psi", "rotation_speed": f"{w} rpm"} for p in (2, 4, 6) for w in (30, 90)]

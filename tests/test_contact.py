@@ -1,6 +1,6 @@
 """Verification of the statistical asperity contact (paper eq. 20-29, corrected).
 
-The reference :func:`contact_reference_mp` re-implements the per-asperity laws (Hertz,
+The reference :func:`cmpsim.testing.references.contact_reference_mp` re-implements the per-asperity laws (Hertz,
 Zhao-Maietta-Chang, Abbott-Firestone) in mpmath, independently of the kernel, and
 integrates them over the truncated, renormalised Gaussian summit-height density with
 adaptive mpmath quadrature (tanh-sinh), broken at D, D + omega_e, D + omega_p and the
@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from cmpsim.contact import ContactTable, PadSurface, asperity_contact, asperity_laws
+from cmpsim.testing.references import _mp_pad, contact_reference_mp, laws_mp
 
 #: The feasibility prototype's pad: omega_e = 0.20 sigma, omega_p = 11 sigma.
 PAD_SOFT = PadSurface(15e-6, 1e8, 50e-6, 110e6, 20e6, 0.3)
@@ -30,104 +31,6 @@ PAD_SOFT_INF = PadSurface(15e-6, 1e8, 50e-6, 110e6, 20e6, 0.3, height_cutoff=np.
 PADS = {"soft": PAD_SOFT, "stiff": PAD_STIFF, "soft_inf": PAD_SOFT_INF, "other_inf": PAD_OTHER_INF}
 MODELS = ("lep", "elastic")
 QUANTITIES = ("pressure", "area_ratio_elastic", "area_ratio_elastoplastic", "area_ratio_plastic")
-
-
-# --- independent mpmath reference ---------------------------------------------------------
-def _mp_pad(pad: PadSurface):
-    """Pad constants in mpmath, from the raw inputs (eq. 27; omega_p = 54 omega_e)."""
-    R, E, H = mp.mpf(pad.asperity_radius), mp.mpf(pad.e_star), mp.mpf(pad.hardness)
-    K = mp.mpf("0.454") + mp.mpf("0.41") * mp.mpf(pad.poisson)
-    w_e = (3 * mp.pi * K * H / (4 * E)) ** 2 * R
-    w_p = 54 * w_e
-    return dict(R=R, E=E, H=H, K=K, w_e=w_e, w_p=w_p, ln_wp=mp.log(w_p), ln_span=mp.log(w_p) - mp.log(w_e))
-
-
-def _laws(omega, c: dict, model: str):
-    if omega <= 0:
-        return mp.mpf(0), mp.mpf(0), 0
-    R, E, H, K, w_e, w_p = c["R"], c["E"], c["H"], c["K"], c["w_e"], c["w_p"]
-    if model == "elastic" or omega < w_e:  # Hertz / Greenwood-Williamson
-        return mp.pi * R * omega, mp.mpf(4) / 3 * E * mp.sqrt(R) * omega * mp.sqrt(omega), 1
-    if omega < w_p:  # Zhao-Maietta-Chang
-        u = (omega - w_e) / (w_p - w_e)
-        area = mp.pi * R * omega * (1 - 2 * u**3 + 3 * u**2)
-        p_mean = H * (1 - (1 - K) * (c["ln_wp"] - mp.log(omega)) / c["ln_span"])
-        return area, p_mean * area, 2
-    area = 2 * mp.pi * R * omega  # Abbott-Firestone
-    return area, H * area, 3
-
-
-def laws_mp(omega, pad: PadSurface, model: str):
-    """Per-asperity (area m^2, load N, regime) of one summit with interference ``omega`` (m), in mpmath."""
-    return _laws(mp.mpf(omega), _mp_pad(pad), model)
-
-
-def gaussian_breakpoints(lo, hi):
-    """Breakpoints for integrating smooth(zeta) * phi(zeta) over [lo, hi] (hi may be inf).
-
-    Tanh-sinh quadrature over a Gaussian tail is unreliable (mp.quad over [14, inf] of
-    (zeta - 3) phi is off by 4e-5), so the band is split at the peak m of phi on it and at
-    m +- k / max(|m|, 1), k = 2, 8: each piece then sees phi vary by a bounded factor.
-    An infinite end is cut at m + 64 / max(|m|, 1), beyond which phi / phi(m) < exp(-64).
-    """
-    m = min(max(lo, mp.mpf(0)), hi)
-    scale = 1 / max(abs(m), mp.mpf(1))
-    hi = min(hi, m + 64 * scale)
-    pts = {lo, hi}
-    for k in (2, 8):
-        for p in (m - k * scale, m + k * scale):
-            if lo < p < hi:
-                pts.add(p)
-    return sorted(pts)
-
-
-def contact_reference_mp(separation: float, pad: PadSurface, model: str = "lep", dps: int = 20):
-    """Nominal pressure (Pa) and the three area ratios at separation D (m), adaptive mpmath.
-
-    Summit heights zeta = z / sigma_s follow phi(zeta) / Phi(c) on (-inf, c], c the cutoff.
-    """
-    with mp.workdps(dps):
-        s = mp.mpf(pad.sigma_s)
-        eta = mp.mpf(pad.asperity_density)
-        consts = _mp_pad(pad)
-        w_e, w_p = consts["w_e"], consts["w_p"]
-        cut = mp.inf if math.isinf(pad.height_cutoff) else mp.mpf(pad.height_cutoff)
-        norm = mp.ncdf(cut) if cut != mp.inf else mp.mpf(1)
-        delta = mp.mpf(separation) / s
-
-        def integral(lo, hi, which):
-            hi = min(hi, cut)
-            if hi <= lo:
-                return mp.mpf(0)
-
-            pick = 0 if which == "area" else 1
-
-            def integrand(zeta):
-                return _laws(s * (zeta - delta), consts, model)[pick] * mp.npdf(zeta)
-
-            pts = gaussian_breakpoints(lo, hi)
-            # mp.quad's tolerance is absolute: scale the integrand to O(1) at the largest of
-            # its values at the breakpoints (interior points of the first and last pieces
-            # stand in for the ends, where the law may vanish)
-            probes = pts[1:-1] + [(pts[0] + pts[1]) / 2, (pts[-2] + pts[-1]) / 2]
-            ref = max(integrand(z) for z in probes)
-
-            return eta / norm * ref * mp.quad(lambda z: integrand(z) / ref, pts)
-
-        if model == "elastic":
-            bands = {"el": (delta, cut), "ep": None, "pl": None}
-        else:
-            bands = {
-                "el": (delta, delta + w_e / s),
-                "ep": (delta + w_e / s, delta + w_p / s),
-                "pl": (delta + w_p / s, cut),
-            }
-        out = {"pressure": mp.mpf(0)}
-        for band, name in (("el", "elastic"), ("ep", "elastoplastic"), ("pl", "plastic")):
-            lim = bands[band]
-            out[f"area_ratio_{name}"] = integral(*lim, "area") if lim else mp.mpf(0)
-            out["pressure"] += integral(*lim, "load") if lim else mp.mpf(0)
-        return out
 
 
 def _separations(pad: PadSurface) -> np.ndarray:

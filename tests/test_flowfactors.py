@@ -23,6 +23,7 @@ from cmpsim.flowfactors import (
     shear_stress_factors,
 )
 from cmpsim.grainflow import grain_coefficients
+from cmpsim.testing.references import omega_eq16, printed_flow_factors, psi_eq17
 
 SQRT_1_5 = math.sqrt(1.5)
 
@@ -37,41 +38,6 @@ def _fg(x):
     """f and g of grain_coefficients at damping ratio x (w/k = 1)."""
     _, f, g = grain_coefficients(x, 1.0)
     return float(f), float(g)
-
-
-# --- independent transcription of the printed equations -------------------------------
-def _omega_eq16(theta, gamma):
-    return math.cos(theta) ** 2 / (gamma + 1) + math.sin(theta) ** 2 * gamma / (gamma + 1)
-
-
-def _psi_eq17(theta, gamma):
-    return math.sin(theta) * math.cos(theta) * (1 - gamma) / (gamma + 1)
-
-
-def printed_flow_factors(hs, f, g, s1, s2, g1, g2, t1, t2):
-    """Eq. 8-15 as printed; returns a dict of every factor."""
-    s = math.sqrt(s1 * s1 + s2 * s2)
-    w1, w2 = (s1 / s) ** 2, (s2 / s) ** 2
-    e = 1.0 / hs
-
-    def pxx(t1, t2):  # eq. 8
-        return 1 + e**2 * g * (1 - f**2 / g * (w2 * _omega_eq16(t2, g2) + w1 * _omega_eq16(t1, g1)))
-
-    def sxx(t1, t2):  # eq. 11
-        return -e * f * (w2 * _omega_eq16(t2, g2) - w1 * _omega_eq16(t1, g1))
-
-    p2, p1 = _psi_eq17(t2, g2), _psi_eq17(t1, g1)
-    r = 0.5 * math.pi
-    return {
-        "p_xx": pxx(t1, t2),
-        "p_xy": -(e**2) * f**2 * (w2 * p2 + w1 * p1),  # eq. 9
-        "p_yy": pxx(r - t1, r - t2),  # eq. 10
-        "s_xx": sxx(t1, t2),
-        "s_xy": -e * f * (w2 * p2 - w1 * p1),  # eq. 12
-        "s_yy": sxx(r - t1, r - t2),  # eq. 13
-        "fs": -3 * e**2 * (w2 * p2 - w1 * p1),  # eq. 14
-        "fp": 1 - e**2 * f * (w2 * p2 + w1 * p1),  # eq. 15
-    }
 
 
 def _all_factors(hs, f, g, rough):
@@ -123,8 +89,8 @@ def test_orientation_coefficients_are_eq_16_and_17_and_isotropic_gives_half_and_
     theta = np.linspace(-3.0, 3.0, 13)
     for gamma in (0.1, 1.0, 6.0):
         om, ps = orientation_coefficients(theta, gamma)
-        np.testing.assert_allclose(om, [_omega_eq16(t, gamma) for t in theta], rtol=1e-15, atol=1e-16)
-        np.testing.assert_allclose(ps, [_psi_eq17(t, gamma) for t in theta], rtol=1e-15, atol=1e-16)
+        np.testing.assert_allclose(om, [omega_eq16(t, gamma) for t in theta], rtol=1e-15, atol=1e-16)
+        np.testing.assert_allclose(ps, [psi_eq17(t, gamma) for t in theta], rtol=1e-15, atol=1e-16)
     om, ps = orientation_coefficients(theta, 1.0)
     np.testing.assert_allclose(om, 0.5, rtol=1e-15)
     assert np.all(ps == 0.0)

@@ -7,7 +7,6 @@ stable rewrite must agree with it, not with another rewrite.
 
 from __future__ import annotations
 
-import contextlib
 import warnings
 
 import mpmath as mp
@@ -17,28 +16,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cmpsim.grainflow import damping_ratio, grain_coefficients
+from cmpsim.testing.references import printed_forms_mp
 
 X_GRID = np.logspace(-8, 3, 40)
 W_OVER_K = (4e-6, 0.25)  # the paper's base value, and an O(1) ratio
 #: Minimum of g over x > 0: g(5.3329463865609...) = 0.96698679749239571955 (mpmath, below).
 G_MIN = 0.9669867974923957
-
-
-def printed_forms_mp(h_over_d, w_over_k, dps: int | None = 50):
-    """Psi, f, g of eq. 6, 18, 19 exactly as printed, in ``dps``-digit arithmetic.
-
-    ``dps=None`` keeps the caller's working precision (needed inside ``mp.diff``).
-    """
-    with mp.workdps(dps) if dps else contextlib.nullcontext():
-        hd, wk = mp.mpf(h_over_d), mp.mpf(w_over_k)
-        x = mp.sqrt(wk) * hd
-        r1 = mp.exp(x) - mp.exp(-x)
-        r2 = mp.exp(x) + mp.exp(-x)
-        psi = mp.sqrt(1 / wk) * (r2 - 2) / r1
-        bracket = r1 / (r2 - 2) - r2 / r1
-        f = 2 + x * bracket
-        g = 1 + 2 * x * bracket + wk * hd**2 * ((r2 / r1) ** 2 - (r2 - 1) / (r2 - 2))
-        return psi, f, g
 
 
 @pytest.mark.parametrize("w_over_k", W_OVER_K)
@@ -153,3 +136,18 @@ def test_outputs_broadcast_h_over_d_against_w_over_k():
     assert psi.shape == f.shape == g.shape == (2, 3)
     psi0, f0, g0 = grain_coefficients(100.0, 1e-4)
     assert psi0.shape == () and psi[1, 1] == psi0 and f[1, 1] == f0 and g[1, 1] == g0
+
+
+def test_grain_flow_object_gives_haffs_laws_with_viscosity_over_pressure_equal_to_a_d_over_t_v():
+    from cmpsim.grainflow import GrainFlow, granular_pressure
+
+    gf = GrainFlow(particle_diameter=100e-9, w_over_k=4e-6, t_over_a=2.0, fluctuation_velocity=1.9)
+    p = gf.pressure(134.0, 67.0, t=1.0)
+    assert p == pytest.approx(134.0 * 67.0 * 1.9**2, rel=1e-15)
+    assert p == granular_pressure(134.0, 67.0, 1.9, t=1.0)
+    assert gf.viscosity(p) / p == pytest.approx(100e-9 / (2.0 * 1.9), rel=1e-15)  # eta / p = (a/t) d / v
+    h = np.array([5e-6, 20e-6])
+    for got, want in zip(gf.coefficients(h), grain_coefficients(h / 100e-9, 4e-6)):
+        np.testing.assert_array_equal(got, want)
+    with pytest.raises(TypeError):  # the old call, with the particle diameter that did nothing, fails loudly
+        granular_pressure(134.0, 100e-9, 67.0, 1.9)

@@ -92,3 +92,4 @@ def test_axisymmetric_poisson_solution_converges_at_second_order():
     print(f"\naxisymmetric Poisson: errors {errs}, observed orders {orders}")
     assert errs[-1] < 1e-3 * R * R
     assert np.all(np.abs(orders - 2.0) < 0.2)
+

@@ -4,7 +4,7 @@ The paper's pad deforms only in its asperity layer: under the 5 µm dome of the 
 wafer then presses hardest at its centre, and the rotation-averaged removal rate falls about
 five-fold from the centre to the edge. With `pad_compliance = "winkler"` the bulk of the pad
 and its subpad deflect too, as a bed of springs of stiffness k = 1 / Σ tᵢ/Mᵢ (layers in series,
-Mᵢ the constrained modulus; [model, section 17](../model.md#17-pad-compliance-beyond-the-paper)). The default stack
+Mᵢ the constrained modulus; [model, section 13c](../model.md#13c-pad-compliance-beyond-the-paper)). The default stack
 is an IC1000-like top pad (1.27 mm, 300 MPa) on a Suba IV-like subpad (1.27 mm, 2.3 MPa),
 k ≈ 1.8 GPa/m: the wafer sinks about 15 µm into the pad, three times its dome height, and the
 pad takes up most of the dome.

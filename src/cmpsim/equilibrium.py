@@ -156,8 +156,9 @@ class WaferProblem:
     foundation : compliance.WinklerFoundation or None
         Elastic pad stack under the asperity layer; ``None`` = rigid pad (the paper).
     solver : callable, optional
-        ``solver(A)`` returning an object with ``.solve(b)`` (a sparse factorisation); default
-        :func:`cmpsim.reynolds.factorize` (SuperLU). Passed to every pressure solve.
+        Sparse solver of every pressure solve, passed to the Reynolds (or cavitation) system
+        (``solver(A)`` returning an object with ``.solve(b)``, a sparse factorisation); default
+        :func:`cmpsim.reynolds.factorize` (SuperLU).
 
     Cost: the factorisation of the last matrix factorised is kept and later trial positions
     are solved by iterative refinement against it (:func:`cmpsim.reynolds.refine`), with a

@@ -16,9 +16,12 @@ so they neither overflow for large x nor lose digits to cancellation for small x
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 __all__ = [
+    "GrainFlow",
     "damping_ratio",
     "grain_coefficients",
     "granular_pressure",
@@ -91,18 +94,53 @@ def grain_coefficients(h_over_d, w_over_k):
     return psi.copy(), f.copy(), g.copy()
 
 
-def granular_pressure(bulk_density, particle_diameter, separation_ratio, fluctuation_velocity, t=1.0):
-    """Haff granular pressure ``p = t d rho v^2 / s`` (eq. 1), in Pa.
+def granular_pressure(bulk_density, separation_ratio, fluctuation_velocity, *, t=1.0):
+    """Haff granular pressure ``p = t d rho v^2 / s = t rho (d/s) v^2`` (eq. 1), in Pa.
 
-    ``separation_ratio`` is d/s, the particle diameter over the mean gap between grains
-    (dimensionless), so that p = t * rho * (d/s) * v**2; ``bulk_density`` in kg/m^3,
-    ``fluctuation_velocity`` v in m/s. ``particle_diameter`` cancels once d/s is given and
-    is accepted only for the record of eq. 1.
+    ``bulk_density`` rho in kg/m^3; ``separation_ratio`` d/s, the particle diameter over the
+    mean gap between grains (dimensionless): the diameter enters only through it;
+    ``fluctuation_velocity`` v in m/s; ``t`` Haff's pressure constant (keyword).
     """
-    del particle_diameter  # enters only through d/s
     return t * np.asarray(bulk_density) * np.asarray(separation_ratio) * np.asarray(fluctuation_velocity) ** 2
 
 
 def granular_viscosity(pressure, particle_diameter, fluctuation_velocity, t_over_a=1.0):
     """Haff granular viscosity ``eta = a d^2 rho v / s = (a/t) p d / v`` (eq. 1), in Pa s."""
     return np.asarray(pressure) * np.asarray(particle_diameter) / (t_over_a * np.asarray(fluctuation_velocity))
+
+
+@dataclass(frozen=True)
+class GrainFlow:
+    """Haff's granular fluid of one slurry (Haff, J. Fluid Mech. 134, 401 (1983), doi:10.1017/S0022112083003419).
+
+    Its constants, and its laws as methods: :meth:`pressure` and :meth:`viscosity` (eq. 1),
+    :meth:`coefficients` (Psi, f, g of eq. 6, 7, 18, 19).
+
+    Attributes
+    ----------
+    particle_diameter : float
+        d, m.
+    w_over_k : float
+        Haff's dissipation over conductivity constant w/k, dimensionless.
+    t_over_a : float
+        Haff's pressure over viscosity constant t/a, dimensionless.
+    fluctuation_velocity : float
+        Granular fluctuation velocity v, m/s.
+    """
+
+    particle_diameter: float
+    w_over_k: float
+    t_over_a: float
+    fluctuation_velocity: float
+
+    def pressure(self, bulk_density, separation_ratio, t: float = 1.0):
+        """Granular pressure p = t rho (d/s) v^2 at bulk density rho and d/s (eq. 1), Pa."""
+        return granular_pressure(bulk_density, separation_ratio, self.fluctuation_velocity, t=t)
+
+    def viscosity(self, pressure):
+        """Granular viscosity eta = (a/t) p d / v at absolute granular pressure p (eq. 1), Pa s."""
+        return granular_viscosity(pressure, self.particle_diameter, self.fluctuation_velocity, self.t_over_a)
+
+    def coefficients(self, h):
+        """Psi, f, g (eq. 6, 18, 19) at film thickness h (m): :func:`grain_coefficients` of h/d."""
+        return grain_coefficients(np.asarray(h) / self.particle_diameter, self.w_over_k)

@@ -18,11 +18,12 @@ __all__ = ["slurry_shear_stress", "newtonian_shear_stress", "viscous_shear_stres
 REMOVAL_LAWS = ("paper", "shear_power")
 
 
-def slurry_shear_stress(p_abs, grad_p, h, du, particle_diameter, fluctuation_velocity, t_over_a, phi_fs, phi_fp):
+def slurry_shear_stress(p_abs, grad_p, h, du, grain, *, phi_fs, phi_fp):
     """Average shear stress of the grain flow on the wafer (Patir–Cheng form, eq. 14–15), Pa.
 
-    tau = eta du / h (1 + Phi_fs) - Phi_fp (h/2) grad p, with the Haff viscosity
-    eta = (a/t) p d / v (eq. 1) of the local absolute granular pressure p.
+    :func:`viscous_shear_stress` with the Haff viscosity eta = (a/t) p d / v (eq. 1) of the
+    local absolute granular pressure p, given by ``grain`` (a
+    :class:`cmpsim.grainflow.GrainFlow`: ``grain.viscosity(p)``).
 
     Parameters
     ----------
@@ -34,17 +35,16 @@ def slurry_shear_stress(p_abs, grad_p, h, du, particle_diameter, fluctuation_vel
         Film thickness, m.
     du : tuple of arrays
         Relative velocity u_pad - u_wafer, m/s.
-    particle_diameter, fluctuation_velocity, t_over_a : float
-        d (m), v (m/s), t/a (-).
+    grain : GrainFlow
+        The slurry's Haff constants (d, t/a, v).
     phi_fs, phi_fp : array
-        Shear-stress factors (eq. 14, 15), dimensionless.
+        Shear-stress factors (eq. 14, 15), dimensionless (keywords).
 
     Returns
     -------
     (tau_x, tau_y) : tuple of arrays, Pa (the drag of the slurry on the wafer).
     """
-    eta = np.asarray(p_abs) * particle_diameter / (t_over_a * fluctuation_velocity)
-    return viscous_shear_stress(eta, grad_p, h, du, phi_fs, phi_fp)
+    return viscous_shear_stress(grain.viscosity(p_abs), grad_p, h, du, phi_fs, phi_fp)
 
 
 def viscous_shear_stress(eta, grad_p, h, du, phi_fs, phi_fp):

@@ -35,7 +35,7 @@ import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from .reynolds import LubricationParameters, lubrication_coefficients
+from ..reynolds import LubricationParameters, lubrication_coefficients
 
 __all__ = [
     "plane_slider_pressure",
