@@ -163,6 +163,26 @@ def main() -> None:
             f"{rn['wall_s']:.1f} s ({rb['wall_s'] / rn['wall_s']:.2f}x), solving {rb['solve_s']:.1f} s -> {rn['solve_s']:.1f} s "
             f"({rb['solve_s'] / rn['solve_s']:.2f}x)"
         )
+    # ---- the goals of issue 15, as ratios measured in this run
+    sp = {name: base["cases"][name]["cpu_s"] / now["cases"][name]["cpu_s"] for name in base["cases"]}
+    c48, c96 = now["cases"]["lep 48x128"], now["cases"]["lep 96x256"]
+    growth = math.log(c96["cpu_s"] / c48["cpu_s"]) / math.log(c96["cells"] / c48["cells"])
+    goals = [
+        ("LEP default >= 2x", sp["lep default"] >= 2.0, f"{sp['lep default']:.2f}x"),
+        ("LEP default <= 2 LU", now["cases"]["lep default"]["factorizations"] <= 2, str(now["cases"]["lep default"]["factorizations"])),
+        ("hydrodynamic cold >= 3x", sp["hydrodynamic cold"] >= 3.0, f"{sp['hydrodynamic cold']:.2f}x"),
+        ("96x256 >= 2.5x", sp["lep 96x256"] >= 2.5, f"{sp['lep 96x256']:.2f}x"),
+        ("growth 48x128 -> 96x256 <= N^1.1", growth <= 1.1, f"N^{growth:.2f}"),
+    ]
+    if "reproduce" in now:
+        rb, rn = base["reproduce"], now["reproduce"]
+        goals += [
+            ("reproduce <= 260 LU", rn["factorizations"] <= 260, f"{rn['factorizations']} ({rn['factorizations'] / rn['equilibria']:.2f} per equilibrium)"),
+            ("reproduce >= 2x wall", rb["wall_s"] / rn["wall_s"] >= 2.0, f"{rb['wall_s'] / rn['wall_s']:.2f}x"),
+        ]
+    print("goals (issue 15):")
+    for label, met, value in goals:
+        print(f"  {'met    ' if met else 'NOT met'}  {label:<34} {value}")
     print(f"same answers (every scalar within {args.rtol:g} relative): {ok}")
     if args.json:
         args.json.write_text(json.dumps({"baseline": base, "now": now}, indent=1))

@@ -598,6 +598,9 @@ def balance_load(problem: WaferProblem, u, max_expansions: int = 40) -> np.ndarr
                 seen[h0] = np.inf
         return seen[h0]
 
+    h0 = _secant_load(problem, u, load)
+    if h0 is not None:
+        return np.array([h0, u[1], u[2]])
     a, fa = u[0], load(u[0])
     step = 0.25 * sigma
     direction = 1.0 if fa > 0 else -1.0
@@ -627,6 +630,45 @@ def balance_load(problem: WaferProblem, u, max_expansions: int = 40) -> np.ndarr
             hi, fhi = mid, fm
     h0 = brentq(load, lo, hi, xtol=1e-6 * sigma, rtol=1e-14, maxiter=200)
     return np.array([h0, u[1], u[2]])
+
+
+def _secant_load(problem: WaferProblem, u, load, max_iter: int = 12):
+    """h0 balancing the load at fixed tilts by a safeguarded Newton/secant iteration on
+    g = ln(1 + R_F) (the load over the applied load, in logarithm: close to linear in h0 where
+    the load is steep); None if it does not converge, so that the bracket takes over.
+
+    Its steps shrink quickly, so that after the first ones the pressure solves refine against
+    the factorisation at hand instead of factorising at every bracket point.
+    """
+    sigma = problem.sigma
+
+    def g(h0):
+        r = load(h0)
+        return np.log1p(r) if np.isfinite(r) and r > -1.0 else np.nan
+
+    h0 = float(u[0])
+    g0 = g(h0)
+    if not np.isfinite(g0):
+        return None
+    eps = 1e-4 * sigma
+    slope = (g(h0 + eps) - g0) / eps
+    for _ in range(max_iter):
+        if not (np.isfinite(slope) and slope < 0):
+            return None
+        step = float(np.clip(-g0 / slope, -0.5 * sigma, 0.5 * sigma))
+        h1 = h0 + step
+        g1 = g(h1)
+        while not np.isfinite(g1) or abs(g1) > abs(g0):  # backtrack towards h0
+            step *= 0.5
+            if abs(step) < 1e-9 * sigma:
+                return None
+            h1 = h0 + step
+            g1 = g(h1)
+        if abs(step) < 1e-6 * sigma or abs(g1) < 1e-12:
+            return h1
+        slope = (g1 - g0) / (h1 - h0)
+        h0, g0 = h1, g1
+    return None
 
 
 def solve_equilibrium(
