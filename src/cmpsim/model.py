@@ -98,7 +98,18 @@ def solve(
             ref = reference_config(config)
             same = ref.to_dict() == config.to_dict()  # the reference case itself: ratio 1
             reference_removal_rate = scalars["removal_rate_mean"] if same else _reference_removal_rate(ref)
-        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
+        if reference_removal_rate > 0:
+            scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
+        else:  # the reference case removes nothing (e.g. the wafer hydroplanes there): no ratio exists
+            import warnings
+
+            warnings.warn(
+                "removal_rate_relative is undefined (NaN, null in JSON): the reference case "
+                "(LEP, 4 psi, 60 rpm, d = 100 nm, sigma = reference_roughness) removes nothing",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            scalars["removal_rate_relative"] = float("nan")
     scan = None
     if check_roots:
         scan = scan_moment_roots(problem, sol)
