@@ -36,10 +36,10 @@ file is in place.
 
 Rooms
 -----
-:mod:`~cmpsim.sweeps.spec` (the sweep file and its layout), :mod:`~cmpsim.sweeps.plan`
-(identity, chains, warm-start prediction), :mod:`~cmpsim.sweeps.executors` (the task of one
-point; serial and Dask execution), :mod:`~cmpsim.sweeps.state` (the ``PATH.parts/``
-directory), :mod:`~cmpsim.sweeps.dataset` (the xarray result, its file and summary);
+``spec`` (the sweep file and its layout), ``plan``
+(identity, chains, warm-start prediction), ``executors`` (the task of one
+point; serial and Dask execution), ``state`` (the ``PATH.parts/``
+directory), ``dataset`` (the xarray result, its file and summary);
 :func:`sweep` connects them.
 """
 
