@@ -31,6 +31,12 @@ odd sectors: every cell then has exactly one face of each colour). The derivativ
 equilibrium residuals with respect to u follows from the same factorisation (implicit
 differentiation, three back-substitutions), and so does a tangent predictor that starts the
 next solve close to its solution.
+
+With lateral coupling (:class:`LayeredFoundation`, ``pad_compliance = "layer"``) the deflection is
+w = C p with a nonlocal compliance C (the top pad as a plate on an elastic subpad layer, applied
+by FFT on a Cartesian auxiliary grid); G becomes k (w - C p), and the same Newton system is
+solved by GMRES preconditioned by the Winkler factorisation of the same stack, whose stiffness k
+is the long-wavelength limit of C.
 """
 
 from __future__ import annotations
