@@ -54,6 +54,7 @@ def test_there_are_examples():
     assert len(SCRIPTS) >= 5
 
 
+@pytest.mark.slow  # the module fixture runs every example (tens of seconds)
 @pytest.mark.parametrize("script", SCRIPTS, ids=[s.stem for s in SCRIPTS])
 def test_example_runs_and_makes_its_figures(script, runs):
     run = runs[script.stem]

@@ -93,7 +93,7 @@ def test_solve_as_netcdf_is_the_file_result_to_netcdf_writes(client, tmp_path):
     (tmp_path / "r.nc").write_bytes(r.content)
     ds = xr.open_dataset(tmp_path / "r.nc", engine="scipy")
     expected = cmpsim.solve(applied_pressure="3 psi", grid="coarse")
-    assert ds.attrs["film_thickness_center_m"] == expected.film_thickness_center_m
+    assert ds["film_thickness_center"].item() == expected.film_thickness_center
     np.testing.assert_array_equal(ds["removal_rate"].values, expected.fields["removal_rate"].values)
 
 
@@ -287,9 +287,9 @@ def test_a_three_point_sweep_runs_to_completion_with_one_event_per_point(client,
     got = xr.open_dataset(tmp_path / "web.nc", engine="scipy")
     expected = sweep(body, out=tmp_path / "cli.nc", workers=0, progress=False)
     assert got["status"].values.tolist() == expected["status"].values.tolist()
-    np.testing.assert_allclose(got["film_thickness_center_m"].values, expected["film_thickness_center_m"].values, rtol=1e-12)
+    np.testing.assert_allclose(got["film_thickness_center"].values, expected["film_thickness_center"].values, rtol=1e-12)
     for i in range(2):
-        assert by_index[i]["values"]["film_thickness_center_m"] == pytest.approx(float(expected["film_thickness_center_m"].values[i]), rel=1e-12)
+        assert by_index[i]["values"]["film_thickness_center"] == pytest.approx(float(expected["film_thickness_center"].values[i]), rel=1e-12)
 
     toml = client.get(f"/api/sweeps/{job['id']}/file")
     assert toml.status_code == 200 and tomllib.loads(toml.text) == body

@@ -117,10 +117,11 @@ def test_a_value_with_a_unit_solves_and_the_results_table_and_the_map_appear(pag
     _open(page, server)
     page.fill('#inputs [name="applied_pressure"]', "3 psi")
     page.click("#solve")
-    cell = page.wait_for_selector('#results td[data-key="film_thickness_center_m"]')
+    cell = page.wait_for_selector('#results td[data-key="film_thickness_center"]')
     page.wait_for_selector("#map-removal_rate .main-svg")
-    expected = json.loads(cmpsim.solve(applied_pressure="3 psi", grid="coarse").to_json())
-    assert float(cell.get_attribute("title")) == expected["film_thickness_center_m"]
+    data = json.loads(cmpsim.solve(applied_pressure="3 psi", grid="coarse").to_json())
+    expected = {**data["values"], **data["solver"]}  # schema 2: the table shows values and solver diagnostics
+    assert float(cell.get_attribute("title")) == expected["film_thickness_center"]
     keys = page.eval_on_selector_all("#results td[data-key]", "cells => cells.map(c => c.dataset.key)")
     assert set(keys) == set(expected)
     for map_id in ("map-removal_rate", "map-film_thickness", "map-pressure"):
@@ -129,7 +130,7 @@ def test_a_value_with_a_unit_solves_and_the_results_table_and_the_map_appear(pag
     page.fill('#inputs [name="applied_pressure"]', "3")
     page.click("#solve")
     page.wait_for_function("document.getElementById('status').textContent.startsWith('Solved')")
-    assert float(page.get_attribute('#results td[data-key="film_thickness_center_m"]', "title")) == expected["film_thickness_center_m"]
+    assert float(page.get_attribute('#results td[data-key="film_thickness_center"]', "title")) == expected["film_thickness_center"]
 
 
 def test_a_bad_value_shows_cmpsims_message_beside_its_input(page, server):

@@ -3,7 +3,7 @@
 The paper's pad deforms only in its asperity layer: under the 5 µm dome of the base case the
 wafer then presses hardest at its centre, and the rotation-averaged removal rate falls about
 five-fold from the centre to the edge. `pad_compliance` adds the bulk of the pad and its subpad
-([model, section 17](../model.md#17-pad-compliance-beyond-the-paper)):
+([model, section 13c](../model.md#13c-pad-compliance-beyond-the-paper)):
 
 - `"winkler"`: a bed of independent springs of stiffness k = 1 / Σ tᵢ/Mᵢ (layers in series,
   Mᵢ the constrained modulus). The default stack is an IC1000-like top pad (1.27 mm, 300 MPa)

@@ -64,11 +64,12 @@ def main():
 @main.command()
 @click.argument("config", required=False, type=click.Path(dir_okay=False))
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units: --set applied_pressure=3psi (repeatable).")
-@click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, result.json and config.toml to DIR.")
+@click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout: schema 2, see cmpsim/data/result.schema.json.")
+@click.option("--schema", "schema", type=click.Choice(["1", "2"]), default="2", show_default=True, help="JSON layout of --json and result.json: 2, or the flat object of cmpsim 0.1 (deprecated).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, profile.png, result.json and config.toml to DIR.")
 @click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
 @click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
-def run(config, assignments, as_json, out_dir, check_roots, preset):
+def run(config, assignments, as_json, schema, out_dir, check_roots, preset):
     """Solve one operating point (the paper's base case by default).
 
     CONFIG is an optional TOML file (sections `[wafer]` `[process]` `[slurry]` `[pad]` `[numerics]`
@@ -87,21 +88,18 @@ def run(config, assignments, as_json, out_dir, check_roots, preset):
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
         _fail(str(exc))
+    schema = int(schema)
+    if schema == 1:
+        click.echo("cmpsim: warning: --schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)", err=True)
     if out_dir:
-        write_outputs(result, Path(out_dir))
+        write_outputs(result, Path(out_dir), schema=schema)
     if as_json:
-        click.echo(result.to_json())
+        click.echo(result.to_json(schema=schema))
         return
     from rich.console import Console
 
     console = Console()
-    console.print(
-        _rich_table(
-            f"cmpsim {cfg.model}: one operating point (grid {cfg.grid_shape[0]}x{cfg.grid_shape[1]})",
-            ["output", "value", "unit", "meaning"],
-            result.summary_rows(),
-        )
-    )
+    console.print(result.summary_table(console.width))
     if result.flow_factor_floored_fraction > 0:
         console.print(
             f"[yellow]warning: the flow-factor tensor was regularised on {100 * result.flow_factor_floored_fraction:.1f} % "
@@ -114,22 +112,22 @@ def run(config, assignments, as_json, out_dir, check_roots, preset):
             f"(at {roots} rad); the equilibrium above is the one Newton reached from the default start[/yellow]"
         )
     if out_dir:
-        console.print(f"wrote {out_dir}/fields.nc, maps.png, result.json, config.toml")
+        console.print(f"wrote {out_dir}/fields.nc, maps.png, profile.png, result.json, config.toml")
 
 
-def write_outputs(result, out: Path) -> None:
-    """fields.nc, maps.png, result.json, config.toml into ``out`` (each written atomically)."""
+def write_outputs(result, out: Path, schema: int = 2) -> None:
+    """fields.nc, maps.png, profile.png, result.json, config.toml into ``out`` (each written atomically)."""
+    import matplotlib.pyplot as plt
+
     from .io import atomic_path, atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
     result.to_netcdf(out / "fields.nc")
-    fig = result.plot()
-    with atomic_path(out / "maps.png", suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    atomic_write_text(out / "result.json", result.to_json(indent=2) + "\n")
+    for name, fig in (("maps.png", result.plot()), ("profile.png", result.plot_profiles())):
+        with atomic_path(out / name, suffix=".png") as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+        plt.close(fig)
+    atomic_write_text(out / "result.json", result.to_json(indent=2, schema=schema) + "\n")
     result.config.to_toml(out / "config.toml")
 
 
@@ -144,8 +142,18 @@ def params(markdown):
         return
     from rich.console import Console
 
-    rows = [(n, format_display(n, p.default), p.display or "-", p.range_text(), p.source) for n, p in PARAMETERS.items()]
-    Console().print(_rich_table("cmpsim inputs (set with --set NAME=VALUE)", ["name", "default", "unit", "valid range (SI)", "source"], rows))
+    from .tables import WIDE, legible_table
+
+    console = Console()
+    rows, detail = [], []
+    for n, p in PARAMETERS.items():
+        unit = p.display if p.unit not in ("choice", "grid") else ""
+        default = format_display(n, p.default) + (f" {unit}" if unit else "")
+        # narrow terminals: the default above its valid range, both in the display unit
+        rows.append((n, default, p.display_range_text()) if console.width >= WIDE else (n, f"{default}\n{p.display_range_text()}"))
+        detail.append(f"{p.description}. Source: {p.source}")
+    header = ["name", "default", "valid range"] if console.width >= WIDE else ["name", "default / valid range"]
+    console.print(legible_table("cmpsim inputs (set with --set NAME=VALUE)", header, rows, detail=detail, detail_header="meaning and source", width=console.width))
 
 
 # ---- sweep command (sweeps.py) ----
@@ -246,15 +254,15 @@ def _split_names(values) -> list[str]:
     return out
 
 
-def _base_config(config_path, assignments, grid):
-    cfg = load_config(config_path, assignments)
+def _base_config(config_path, assignments, grid, preset=None):
+    cfg = load_config(config_path, assignments, preset)
     return cfg.replace(grid=grid) if grid else cfg
 
 
 @main.command(name="reproduce", short_help="Regenerate the paper's Figs. 3-12, their CSVs and a trend-table report.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="reproduction", show_default=True, help="Directory for the ten PNG + CSV figures, trends.csv, REPORT.md and REPORT.html.")
 @click.option("--grid", type=click.Choice(["coarse", "default", "fine"]), default="default", show_default=True, help="Grid of every solve.")
-@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the figures do not vary (e.g. from `cmpsim calibrate`).")
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the figures do not vary (e.g. from `cmpsim calibrate`); inputs it does not set are the paper preset's.")
 def reproduce_command(out_dir, grid, config_path):
     """Regenerate the paper's Figs. 3-12, their CSVs and a report with the trend table.
 
@@ -265,7 +273,7 @@ def reproduce_command(out_dir, grid, config_path):
     from .reproduction import reproduce
 
     try:
-        cfg = load_config(config_path, ())
+        cfg = load_config(config_path, (), "paper")  # the paper's figures: the paper's model
     except ValueError as exc:
         _fail(str(exc))
     command = "cmpsim reproduce" + (f" --out {out_dir}" if out_dir != "reproduction" else "") + (f" --grid {grid}" if grid != "default" else "") + (f" --config {config_path}" if config_path else "")
@@ -294,7 +302,8 @@ def reproduce_command(out_dir, grid, config_path):
 @click.option("--grid", default=None, help="Grid preset (coarse, default, fine) or NRxNT; default: the configuration's.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="validation", show_default=True, help="Directory for parity.png, points.csv and datasets.csv.")
 @click.option("--markdown", is_flag=True, help="Print the tables as Markdown instead of rich tables.")
-def validate_command(data, config_path, assignments, grid, out_dir, markdown):
+@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
+def validate_command(data, config_path, assignments, grid, out_dir, markdown, preset):
     """Compare the model with measured data; with no DATA, every data set shipped with cmpsim.
 
     DATA are CSV files in the format of cmpsim/data/README.md (operating conditions with
@@ -305,7 +314,7 @@ def validate_command(data, config_path, assignments, grid, out_dir, markdown):
     from .validation import validate
 
     try:
-        cfg = _base_config(config_path, assignments, grid)
+        cfg = _base_config(config_path, assignments, grid, preset)
         report = validate(list(data) or None, config=cfg, progress=not markdown)
     except ValueError as exc:
         _fail(str(exc))
@@ -341,7 +350,8 @@ def validate_command(data, config_path, assignments, grid, out_dir, markdown):
 @click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="Fitted configuration, accepted by `cmpsim run`, `validate --config` and `reproduce --config`.")
 @click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser.")
 @click.option("--quiet", is_flag=True, help="Do not print the evaluations while fitting.")
-def calibrate_command(data, free, bounds, config_path, assignments, grid, out_path, max_evaluations, quiet):
+@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
+def calibrate_command(data, free, bounds, config_path, assignments, grid, out_path, max_evaluations, quiet, preset):
     """Fit uncertain inputs to measurements (scipy least_squares, bounded).
 
     Reports fitted values with standard errors and 95 % intervals, their correlations and
@@ -358,7 +368,7 @@ def calibrate_command(data, free, bounds, config_path, assignments, grid, out_pa
             name, rng = item.split("=", 1)
             lo, hi = rng.split(":", 1)
             bnds[name.strip().replace("-", "_")] = (lo.strip(), hi.strip())
-        cfg = _base_config(config_path, assignments, grid)
+        cfg = _base_config(config_path, assignments, grid, preset)
         result = calibrate(list(data), names, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
     except ValueError as exc:
         _fail(str(exc))

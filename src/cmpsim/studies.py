@@ -121,7 +121,7 @@ class PointCache:
         if config_key(ref) == key:
             return None  # the reference case itself: relative rate 1
         out = self.solve(ref)
-        return out.result.removal_rate if out.ok else float("nan")
+        return out.result.removal_rate_mean if out.ok else float("nan")
 
 
 class Progress:

@@ -88,7 +88,7 @@ function fmt(v) {
 }
 
 // SI unit -> (factor, unit shown) for plots; anything else is shown as it is.
-const SHOWN = { m: [1e6, "\u00b5m"], Pa: [1e-3, "kPa"], "m/s": [6e10, "nm/min"] };
+const SHOWN = { m: [1e6, "\u00b5m"], Pa: [1e-3, "kPa"], "m/s": [6e10, "nm/min"], "m s-1": [6e10, "nm/min"] };
 function shownUnit(unit) { return SHOWN[unit] || [1, unit || ""]; }
 
 // ------------------------------------------------------------------ errors

@@ -1,0 +1,142 @@
+"""The floors of cmpsim and the rule the house keeps: nothing imports upwards.
+
+:data:`FLOORS` lists the floors from the bottom up, each with its rooms (modules, or
+packages with rooms of their own). A module may import from its own floor and the floors
+below it, never from a floor above; the kernels import nothing of cmpsim at all. ``io`` and
+``_version`` are utilities that every floor may import and that import nothing of cmpsim.
+The rule holds for every import, at the top of a module or inside a function.
+
+``tests/test_house.py`` checks the rule on the source (parsed with :mod:`ast`, nothing is
+imported); ``docs/gen_house.py`` draws the house of ``docs/developer.md`` from the same table
+and the same import graph.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+__all__ = ["FLOORS", "UTILITIES", "source_modules", "imports_of", "floor_of", "violations", "import_cycles"]
+
+#: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
+FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
+    ("kernels", "pure vectorised physics, each function an equation of the paper", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal")),
+    ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems", ("grid", "reynolds", "cavitation")),
+    ("solver", "force and moment balance of the wafer (Newton)", ("equilibrium",)),
+    ("inputs", "the parameter registry with units, ranges and sources", ("units", "config")),
+    ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
+    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "testing")),
+    ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
+)
+#: Modules any floor may import; they import nothing of cmpsim.
+UTILITIES = ("io", "_version")
+
+
+def _name(path: Path, root: Path) -> str:
+    parts = list(path.relative_to(root.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def source_modules(root: Path) -> dict[str, Path]:
+    """{dotted module name: path} of every module under ``root`` (the ``cmpsim`` source folder)."""
+    root = Path(root)
+    return {_name(p, root): p for p in sorted(root.rglob("*.py"))}
+
+
+def imports_of(path: Path, name: str, top_level_only: bool = False) -> set[str]:
+    """The cmpsim modules that module ``name`` (at ``path``) imports, relative imports resolved.
+
+    ``from . import x`` counts as importing ``package.x``. With ``top_level_only`` only the
+    imports run when the module is imported (not those inside functions) are returned.
+    """
+    tree = ast.parse(Path(path).read_text(encoding="utf-8"))
+    package = name if Path(path).name == "__init__.py" else name.rpartition(".")[0]
+    nodes = tree.body if top_level_only else ast.walk(tree)
+    found: set[str] = set()
+    for node in nodes:
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name.split(".")[0] == "cmpsim"}
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - (node.level - 1)]
+                module = ".".join(base + ([node.module] if node.module else []))
+            else:
+                module = node.module or ""
+            if module.split(".")[0] != "cmpsim":
+                continue
+            if node.module is None or module == "cmpsim":  # from . import x: the module x (or a name of the package)
+                found |= {f"{module}.{a.name}" for a in node.names}
+            else:
+                found.add(module)
+    return found
+
+
+def room_of(module: str) -> str:
+    """The room of a dotted module name: ``cmpsim.sweeps.plan`` -> ``sweeps``, ``cmpsim`` -> ``cmpsim``."""
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else parts[0]
+
+
+def floor_of(module: str) -> int | None:
+    """Index in :data:`FLOORS` of the floor of ``module`` (None for a utility or an unknown room)."""
+    room = room_of(module)
+    for k, (_, _, rooms) in enumerate(FLOORS):
+        if room in rooms:
+            return k
+    return None
+
+
+def _target(name: str, modules: dict[str, Path]) -> str:
+    """An imported name resolved to a module: ``cmpsim.config.Config`` is not a module, ``cmpsim.config`` is."""
+    while name not in modules and "." in name:
+        name = name.rpartition(".")[0]
+    return name
+
+
+def violations(root: Path) -> list[str]:
+    """Every import that breaks the rule, as ``'a imports b (floor x above floor y)'`` lines."""
+    modules = source_modules(root)
+    out = []
+    for name, path in modules.items():
+        room = room_of(name)
+        here = floor_of(name)
+        if here is None and room not in UTILITIES:
+            out.append(f"{name} is on no floor: add its room to cmpsim.testing.house.FLOORS (and docs/developer.md)")
+            continue
+        for imported in sorted(imports_of(path, name)):
+            target = _target(imported, modules)
+            if room_of(target) == room:
+                continue
+            there = floor_of(target)
+            if room in UTILITIES:
+                out.append(f"{name} is a utility and imports {target}")
+            elif here == 0:
+                out.append(f"{name} is a kernel and imports {target}: kernels import nothing of cmpsim")
+            elif there is not None and there > here:
+                out.append(f"{name} imports {target}: floor '{FLOORS[there][0]}' is above floor '{FLOORS[here][0]}'")
+    return out
+
+
+def import_cycles(root: Path) -> list[list[str]]:
+    """Cycles of the imports run when modules are imported (top-level imports only)."""
+    modules = source_modules(root)
+    graph = {n: {_target(i, modules) for i in imports_of(p, n, top_level_only=True)} & set(modules) - {n} for n, p in modules.items()}
+    cycles, state = [], {}
+
+    def visit(node, stack):
+        state[node] = 1
+        stack.append(node)
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                cycles.append(stack[stack.index(nxt):] + [nxt])
+            elif nxt not in state:
+                visit(nxt, stack)
+        stack.pop()
+        state[node] = 2
+
+    for n in sorted(graph):
+        if n not in state:
+            visit(n, [])
+    return cycles
