@@ -3,6 +3,9 @@
 The rotation-averaged profile and its non-uniformity are computed here from
 ``result.polar["removal_rate"]`` (rings x sectors) by a small helper; once the results-schema
 branch lands they should come from its ``removal_rate_profile`` / ``within_wafer_nonuniformity``.
+
+These tests switch the Winkler stack on under the paper's model (``Config.paper()``: rigid pad,
+granular slurry) and compare with it; the default model already has the compliant pad.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ from cmpsim.grid import PolarGrid
 from cmpsim.model import build_problem
 from cmpsim.setup import pad_foundation
 
+PAPER = Config.paper()
 COMPLIANT = {"pad_compliance": "winkler"}
 #: Scalars that are solver diagnostics, not results.
 DIAGNOSTICS = {"load_residual", "moment_residual", "iterations", "factorizations", "converged"}
@@ -39,12 +43,12 @@ def wiwnu(result, edge_exclusion: float = 3e-3) -> float:
 
 @pytest.fixture(scope="module")
 def rigid():
-    return cmpsim.solve(relative=False)
+    return cmpsim.solve(PAPER, relative=False)
 
 
 @pytest.fixture(scope="module")
 def compliant():
-    return cmpsim.solve(relative=False, **COMPLIANT)
+    return cmpsim.solve(PAPER, relative=False, **COMPLIANT)
 
 
 # ---------------------------------------------------------------------------------- kernels
@@ -68,31 +72,33 @@ def test_layers_in_series_add_their_compliances():
 
 
 def test_the_default_stack_is_ic1000_on_suba_iv_and_subpad_zero_means_none():
-    c = Config.default().replace(**COMPLIANT)
+    c = PAPER.replace(**COMPLIANT)
     k = pad_foundation(c).stiffness
     k_top = constrained_modulus(c.pad_bulk_modulus, c.pad_poisson) / c.pad_thickness
     k_sub = constrained_modulus(c.subpad_modulus, c.subpad_poisson) / c.subpad_thickness
     assert 1.0 / k == pytest.approx(1.0 / k_top + 1.0 / k_sub, rel=1e-14)
     assert c.pad_thickness == pytest.approx(1.27e-3) and c.subpad_thickness == pytest.approx(1.27e-3)
     assert pad_foundation(c.replace(subpad_thickness=0)).stiffness == pytest.approx(k_top, rel=1e-14)
-    assert pad_foundation(Config.default()) is None
+    assert pad_foundation(PAPER) is None
+    # the default model stands on that stack
+    assert pad_foundation(Config.default()).stiffness == pytest.approx(k, rel=1e-14)
 
 
 def test_paper_preset_stays_rigid_and_hydrodynamic_or_jfo_refuse_a_compliant_pad():
     assert PRESETS["paper"]["pad_compliance"] == "rigid"
     assert Config.paper().replace(pad_bulk_modulus="200 MPa").pad_compliance == "rigid"
     with pytest.raises(ValueError, match="pad_compliance"):
-        Config.default().replace(model="hydrodynamic", **COMPLIANT)
+        PAPER.replace(model="hydrodynamic", **COMPLIANT)
     with pytest.raises(ValueError, match="jfo"):
-        Config.default().replace(slurry_model="newtonian", cavitation="jfo", **COMPLIANT)
+        PAPER.replace(slurry_model="newtonian", cavitation="jfo", **COMPLIANT)
     with pytest.raises(ValueError, match="pad_poisson"):
-        Config.default().replace(pad_poisson=0.5, **COMPLIANT)
+        PAPER.replace(pad_poisson=0.5, **COMPLIANT)
     with pytest.raises(ValueError, match="subpad_modulus"):
-        Config.default().replace(subpad_modulus="-1 MPa")
+        PAPER.replace(subpad_modulus="-1 MPa")
 
 
 def test_local_deflection_balances_the_foundation_cell_by_cell():
-    problem = build_problem(Config.default().replace(**COMPLIANT))
+    problem = build_problem(PAPER.replace(**COMPLIANT))
     h_rigid = np.linspace(-10e-6, 50e-6, 41)
     w = local_deflection(problem, h_rigid, 0.0)
     p = problem.contact(h_rigid + w)[0]
@@ -116,19 +122,19 @@ def test_polar_interpolation_is_exact_at_cell_centres_and_second_order():
 
 # ---------------------------------------------------------------------------------- limits
 def test_rigid_setting_takes_the_unchanged_rigid_path(rigid):
-    assert build_problem(Config.default()).foundation is None
+    assert build_problem(PAPER).foundation is None
     assert rigid.solution.state.deflection is None and rigid.solution.state.system is not None
     assert np.all(rigid.polar["pad_deflection"] == 0.0)
 
 
 def test_huge_stiffness_reproduces_the_rigid_pad_to_1e_8(rigid):
-    stiff = cmpsim.solve(relative=False, subpad_thickness=0, pad_bulk_modulus="1e22 Pa", **COMPLIANT)
+    stiff = cmpsim.solve(PAPER, relative=False, subpad_thickness=0, pad_bulk_modulus="1e22 Pa", **COMPLIANT)
     assert stiff.problem.foundation.stiffness > 1e24
-    angle = abs(rigid.attack_angle_rad)
+    angle = abs(rigid.attack_angle)
     for name, want in rigid.scalars.items():
         if name in DIAGNOSTICS:
             continue
-        atol = 1e-8 * angle if name == "cross_tilt_rad" else 0.0
+        atol = 1e-8 * angle if name == "cross_tilt" else 0.0
         assert stiff.scalars[name] == pytest.approx(want, rel=1e-8, abs=atol), name
     for name, want in rigid.polar.items():
         scale = np.max(np.abs(want)) or 1.0
@@ -141,10 +147,10 @@ def test_flat_wafer_under_uniform_speed_on_a_winkler_pad_has_uniform_pressure_an
     # p = p0, the contact pressure and the deflection are uniform and the moments vanish by the
     # symmetry of the grid. The uniform state solves the discrete equations exactly: what is left
     # is round-off, not discretisation error.
-    r = cmpsim.solve(relative=False, dome_height=0.0, kinematics="sliding", **COMPLIANT)
+    r = cmpsim.solve(PAPER, relative=False, dome_height=0.0, kinematics="sliding", **COMPLIANT)
     st = r.solution.state
     R, sigma = r.grid.radius, r.config.pad_roughness
-    assert abs(r.attack_angle_rad) * R / sigma < 1e-12 and abs(r.cross_tilt_rad) * R / sigma < 1e-12
+    assert abs(r.attack_angle) * R / sigma < 1e-12 and abs(r.cross_tilt) * R / sigma < 1e-12
     p = st.p_total
     assert np.ptp(p) / p.mean() < 1e-12
     assert np.ptp(st.deflection) / st.deflection.mean() < 1e-12
@@ -166,7 +172,7 @@ def test_flat_wafer_under_uniform_speed_on_a_winkler_pad_has_uniform_pressure_an
     ids=["base", "2psi", "6psi-90rpm", "soft-subpad", "newtonian", "newtonian-gumbel"],
 )
 def test_load_and_moment_balance_to_1e_9_with_compliance(overrides):
-    r = cmpsim.solve(relative=False, **COMPLIANT, **overrides)
+    r = cmpsim.solve(PAPER, relative=False, **COMPLIANT, **overrides)
     st = r.solution.state
     assert r.converged and abs(r.load_residual) < 1e-9 and r.moment_residual < 1e-9
     # the residual is what it claims: integrate the pressure field independently
@@ -179,7 +185,7 @@ def test_load_and_moment_balance_to_1e_9_with_compliance(overrides):
     # the film the outputs report is the deformed one: the rigid film plus the deflection
     u, c = st.u, r.config
     rigid_centre = film_thickness(0.0, 0.0, u[0], u[1], c.dome_height, g.radius, cross_tilt=u[2])
-    assert r.film_thickness_center_m == pytest.approx(rigid_centre + float(g.interpolate(st.deflection, 0.0, 0.0)), rel=1e-14)
+    assert r.film_thickness_center == pytest.approx(rigid_centre + float(g.interpolate(st.deflection, 0.0, 0.0)), rel=1e-14)
 
 
 def test_equilibrium_jacobian_includes_the_compliance_central_difference(compliant):
@@ -204,7 +210,7 @@ def test_equilibrium_jacobian_includes_the_compliance_central_difference(complia
 
 def test_deflection_converges_at_second_order_with_the_grid():
     grids = ((10, 24), (20, 48), (40, 96))
-    w = [cmpsim.solve(relative=False, grid=f"{n}x{m}", **COMPLIANT).solution.state.deflection for n, m in grids]
+    w = [cmpsim.solve(PAPER, relative=False, grid=f"{n}x{m}", **COMPLIANT).solution.state.deflection for n, m in grids]
     g0 = PolarGrid(1.0, *grids[0])
 
     def restrict(field, levels):
@@ -227,7 +233,7 @@ def test_deflection_converges_at_second_order_with_the_grid():
 
 # ---------------------------------------------------------------------------------- physics
 def test_compliance_flattens_the_removal_profile_and_a_softer_stack_flattens_it_more(rigid, compliant):
-    soft = cmpsim.solve(relative=False, subpad_thickness="2.54 mm", **COMPLIANT)
+    soft = cmpsim.solve(PAPER, relative=False, subpad_thickness="2.54 mm", **COMPLIANT)
     w_rigid, w_default, w_soft = wiwnu(rigid), wiwnu(compliant), wiwnu(soft)
     print(f"\nWIWNU (3 mm edge exclusion): rigid {w_rigid:.3f}, default stack {w_default:.3f}, 2x subpad {w_soft:.3f}")
     assert w_rigid > w_default > w_soft
