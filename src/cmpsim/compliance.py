@@ -614,7 +614,7 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
     K = k - P_h
     S = (ev.matrix + R_w @ sp.diags(P_phi / K)).tocsr()
-    factor = (getattr(problem, "solver", None) or factorize)(S)
+    factor = (problem.solver or factorize)(S)
     problem.factorizations += 1
     lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
     f = problem.foundation
