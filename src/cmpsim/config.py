@@ -289,7 +289,9 @@ class Config:
 
     @classmethod
     def default(cls) -> "Config":
-        """The paper's base case (Table 1) plus the cited defaults of docs/model.md."""
+        """The default, predictive model at the paper's operating point (3-inch wafer, 5 um dome,
+        4 psi, 60 rpm): Newtonian slurry, Gumbel cavitation, compliant pad stack, measured IC1000
+        summits, shear-power removal (docs/model.md, section 13d). :meth:`paper` is the paper's model."""
         return cls()
 
     @classmethod
