@@ -20,11 +20,11 @@ __all__ = ["FLOORS", "UTILITIES", "source_modules", "imports_of", "floor_of", "v
 
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("kernels", "pure vectorised physics, each function an equation of the paper", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal")),
+    ("kernels", "pure vectorised physics, each function an equation of the paper", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "uniformity")),
     ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems", ("grid", "reynolds", "cavitation")),
-    ("solver", "force and moment balance of the wafer (Newton)", ("equilibrium",)),
+    ("solver", "force and moment balance of the wafer (Newton), with the compliant pad stack", ("equilibrium", "compliance")),
     ("inputs", "the parameter registry with units, ranges and sources", ("units", "config")),
-    ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
+    ("operating point", "one Config in, one Result out; the output registry and its tables", ("outputs", "tables", "setup", "postprocess", "result", "model")),
     ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
