@@ -9,8 +9,11 @@ is an IC1000-like top pad (1.27 mm, 300 MPa) on a Suba IV-like subpad (1.27 mm, 
 k ≈ 1.8 GPa/m: the wafer sinks about 15 µm into the pad, three times its dome height, and the
 pad takes up most of the dome.
 
-This script solves the base case (3-inch wafer, 4 psi, 60 rpm) on a rigid and on the default
-compliant pad, then varies the subpad's thickness and modulus.
+This script solves the paper's base case (3-inch wafer, 4 psi, 60 rpm) on the paper's model
+(`cmpsim.Config.paper()`, rigid pad) and on the same model with the default compliant stack
+(`pad_compliance = "winkler"`, the stack of `Config.default()`), then varies the subpad's
+thickness and modulus. (`Config.default()` itself uses that stack with the rest of the
+default model: Newtonian slurry, measured IC1000 summits, shear-power removal.)
 
 ![Rotation-averaged removal profiles, rigid and compliant pads](profiles.png)
 
@@ -71,7 +74,7 @@ def nonuniformity(result, edge_exclusion=EDGE_EXCLUSION):
     return float(np.sqrt(np.sum(a * (rr[keep] - mean) ** 2) / np.sum(a)) / mean)
 
 
-base = cmpsim.Config.default().replace(grid=GRID)
+base = cmpsim.Config.paper().replace(grid=GRID)  # the paper's model on its rigid pad; only pad_compliance changes below
 rigid = cmpsim.solve(base, relative=False)
 compliant = cmpsim.solve(base.replace(pad_compliance="winkler"), relative=False)
 k_default = compliant.problem.foundation.stiffness
