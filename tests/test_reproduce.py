@@ -76,12 +76,6 @@ def test_csv_holds_every_point_and_the_regularisation_flag(report):
     assert any("regularised" in n for n in report.notes)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: Config.paper() sets pad_roughness = reference_roughness = '15 um' -> 1.4999999999999999e-05 m, the "
-    "curves of cmpsim.reproduction set 15e-6 (1.5e-05) m, so the reference case is not one of the planned points: "
-    "solved once more, from the cold start (fix: SI floats in PRESETS['paper'] or an exact unit conversion)",
-)
 def test_relative_removal_rate_is_the_removal_rate_over_that_of_the_papers_reference_case(report):
     """Every point of Figs. 11-12 is divided by the removal rate of case (a) at 4 psi and 60 rpm,
     and that point is the reference case `cmpsim.solve` uses (LEP, 100 nm, 15 um, 4 psi, 60 rpm)."""
@@ -97,12 +91,6 @@ def test_relative_removal_rate_is_the_removal_rate_over_that_of_the_papers_refer
         assert r["removal_rate_relative"] == pytest.approx(r["removal_rate_nm_per_min"] / ref, rel=1e-12), (r["curve"], r["applied_pressure_psi"], r["rotation_speed_rpm"])
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: Config.paper() sets pad_roughness = reference_roughness = '15 um' -> 1.4999999999999999e-05 m, the "
-    "curves of cmpsim.reproduction set 15e-6 (1.5e-05) m, so the reference case is not one of the planned points: "
-    "solved once more, from the cold start (fix: SI floats in PRESETS['paper'] or an exact unit conversion)",
-)
 def test_identical_points_are_solved_once_and_their_pressure_solves_counted_once(report):
     from cmpsim.studies import config_key
 

@@ -166,11 +166,12 @@ PRESETS: dict[str, dict[str, Any]] = {
         "slurry_model": "granular",
         "cavitation": "none",
         "pad_compliance": "rigid",
-        "pad_modulus": "100 MPa",
-        "pad_hardness": "9.4 MPa",
-        "asperity_radius": "50 um",
-        "pad_roughness": "15 um",
-        "reference_roughness": "15 um",
+        # SI floats, exactly the defaults of cmpsim 0.1.0 ("15 um" would parse to 1.4999999999999999e-05 m)
+        "pad_modulus": 100e6,
+        "pad_hardness": 9.4e6,
+        "asperity_radius": 50e-6,
+        "pad_roughness": 15e-6,
+        "reference_roughness": 15e-6,
     },
 }
 
