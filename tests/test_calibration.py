@@ -83,6 +83,8 @@ def test_free_takes_several_names_after_one_flag(synthetic, tmp_path, monkeypatc
     assert res.exit_code == 2
     res = CliRunner().invoke(main, ["calibrate", "--free", "asperity_density", str(synthetic)])
     assert seen["free"] == ["asperity_density"]
+    CliRunner().invoke(main, ["calibrate", str(synthetic), "--free", "asperity_density,pad_modulus", "--free", "asperity_radius"])
+    assert seen["free"] == ["asperity_density", "pad_modulus", "asperity_radius"]
 
 
 @pytest.mark.parametrize(

@@ -50,7 +50,7 @@ def test_run_table_gives_every_output_its_unit_in_the_unit_column():
     expected = cmpsim.solve(grid="coarse").summary_rows()
     for name, _, unit, _ in expected:
         assert rows[name][column.index("unit")] == unit, name
-    assert {"um", "nm/min", "rad"} <= {unit for _, _, unit, _ in expected}
+    assert {"um", "nm/min", "urad", "%", "kPa"} <= {unit for _, _, unit, _ in expected}
 
 
 @pytest.mark.parametrize(
@@ -96,3 +96,39 @@ def test_console_script_runs_on_defaults():
     proc = subprocess.run([sys.executable, "-m", "cmpsim.cli", "run", "--json"], capture_output=True, text=True, check=False)
     assert proc.returncode == 0, proc.stderr
     assert json.loads(proc.stdout)["solver"]["converged"] is True
+
+
+def test_every_solving_command_takes_its_inputs_the_same_way(tmp_path, monkeypatch):
+    """--config, --preset, --set and --grid on run, reproduce, validate and calibrate; `run FILE` is `run --config FILE`."""
+    import cmpsim
+
+    cfg_file = tmp_path / "in.toml"
+    cmpsim.Config.default().replace(applied_pressure="3 psi").to_toml(cfg_file)
+    positional = CliRunner().invoke(main, ["run", str(cfg_file), "--json", "--grid", "coarse"])
+    option = CliRunner().invoke(main, ["run", "--config", str(cfg_file), "--json", "--set", "grid=coarse"])
+    assert positional.exit_code == option.exit_code == 0, positional.output + option.output
+    assert json.loads(positional.stdout) == json.loads(option.stdout)
+    both = CliRunner().invoke(main, ["run", str(cfg_file), "--config", str(cfg_file)])
+    assert both.exit_code == 2 and "give the configuration once" in both.stderr
+
+    seen = {}
+
+    def capture(name):
+        def fake(*args, config=None, **kw):
+            seen[name] = config
+            raise ValueError("stop here")
+
+        return fake
+
+    monkeypatch.setattr("cmpsim.reproduction.reproduce", capture("reproduce"))
+    monkeypatch.setattr("cmpsim.validation.validate", capture("validate"))
+    monkeypatch.setattr("cmpsim.calibration.calibrate", capture("calibrate"))
+    inputs = ["--config", str(cfg_file), "--preset", "paper", "--set", "particle_diameter=150nm", "--grid", "12x32"]
+    for command in (["reproduce", "--out", str(tmp_path / "r")], ["validate", "--out", str(tmp_path / "v")], ["calibrate", str(cfg_file), "--free", "pad_modulus"]):
+        res = CliRunner().invoke(main, command + inputs)
+        assert res.exit_code == 2 and "stop here" in res.stderr, res.output
+        cfg = seen[command[0]]
+        assert (cfg.grid_shape, cfg.particle_diameter) == ((12, 32), pytest.approx(150e-9)), command[0]
+        assert cfg.applied_pressure == pytest.approx(cmpsim.Config.default().replace(applied_pressure="3 psi").applied_pressure)
+        bad = CliRunner().invoke(main, command + ["--grid", "3x3"])
+        assert bad.exit_code == 2 and "grid must be" in bad.stderr, command[0]

@@ -3,6 +3,11 @@
 A thin layer over the Python API: every command calls the function of the same name.
 Bad input exits with status 2 and a message naming the parameter and its valid range;
 an operating point without equilibrium exits with status 3 and the diagnosis.
+
+Every command that solves takes its inputs the same way (:func:`config_options`): a preset
+(``--preset``), then a TOML file (``--config FILE``), then changes (``--set NAME=VALUE``,
+repeatable) and the grid (``--grid``), in that order. ``cmpsim run FILE`` is the same as
+``cmpsim run --config FILE``.
 """
 
 from __future__ import annotations
@@ -35,13 +40,28 @@ def parse_assignments(items) -> dict[str, str]:
     return out
 
 
-def load_config(config_path, assignments, preset: str | None = None):
-    """Config from a preset, an optional TOML file and --set overrides, in that order (raises ValueError)."""
+def load_config(config_path, assignments, preset: str | None = None, grid: str | None = None):
+    """Config from a preset, an optional TOML file, --set overrides and the grid, in that order (raises ValueError)."""
     from .config import Config
 
     base = Config.preset(preset) if preset else Config.default()
     cfg = Config.from_toml(config_path, base=base) if config_path else base
-    return cfg.replace(**parse_assignments(assignments))
+    cfg = cfg.replace(**parse_assignments(assignments))
+    return cfg.replace(grid=grid) if grid else cfg
+
+
+def config_options(command):
+    """The options of the inputs, the same on every command that solves: --config, --preset, --set, --grid."""
+    for option in reversed(
+        [
+            click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file of inputs: sections [wafer] [process] [slurry] [pad] [numerics] or flat keys, values with units or SI (e.g. from `cmpsim calibrate`)."),
+            click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md)."),
+            click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units: --set applied_pressure=3psi (repeatable)."),
+            click.option("--grid", default=None, metavar="GRID", help="Grid: coarse, default, fine or NRxNT (rings x sectors); default: the configuration's."),
+        ]
+    ):
+        command = option(command)
+    return command
 
 
 def _rich_table(title, header, rows):
@@ -63,23 +83,25 @@ def main():
 
 @main.command()
 @click.argument("config", required=False, type=click.Path(dir_okay=False))
-@click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units: --set applied_pressure=3psi (repeatable).")
+@config_options
 @click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout: schema 2, see cmpsim/data/result.schema.json.")
 @click.option("--schema", "schema", type=click.Choice(["1", "2"]), default="2", show_default=True, help="JSON layout of --json and result.json: 2, or the flat object of cmpsim 0.1 (deprecated).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, profile.png, result.json and config.toml to DIR.")
 @click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
-@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
-def run(config, assignments, as_json, schema, out_dir, check_roots, preset):
+def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir, check_roots):
     """Solve one operating point (the paper's base case by default).
 
-    CONFIG is an optional TOML file (sections `[wafer]` `[process]` `[slurry]` `[pad]` `[numerics]`
-    or flat keys; values with units such as "4 psi" or SI numbers). See `cmpsim params`.
+    CONFIG is an optional TOML file, the same as --config (sections `[wafer]` `[process]`
+    `[slurry]` `[pad]` `[numerics]` or flat keys; values with units such as "4 psi" or SI
+    numbers). See `cmpsim params`.
     """
     from .equilibrium import EquilibriumError
     from .model import solve
 
+    if config and config_path:
+        _fail(f"give the configuration once: CONFIG ({config}) or --config ({config_path})")
     try:
-        cfg = load_config(config, assignments, preset)
+        cfg = load_config(config or config_path, assignments, preset, grid)
     except ValueError as exc:
         _fail(str(exc))
     try:
@@ -156,7 +178,6 @@ def params(markdown):
     console.print(legible_table("cmpsim inputs (set with --set NAME=VALUE)", header, rows, detail=detail, detail_header="meaning and source", width=console.width))
 
 
-# ---- sweep command (sweeps.py) ----
 @main.command(name="sweep")
 @click.argument("sweep_file", type=click.Path(dir_okay=False))
 @click.option("--out", "out_path", type=click.Path(), help="Result file: NetCDF (default SWEEP_FILE stem + .nc in the current directory), or zarr for a .zarr path.")
@@ -214,37 +235,30 @@ def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, 
     click.echo(f"wrote {out} in {elapsed:.1f} s")
 
 
-# ---- end sweep command ----
+class _ListOptionsCommand(click.Command):
+    """A command whose list options take several values after one flag: ``--free A B C``.
 
-
-# ---- reproduce/validate/calibrate commands ----
-class _GreedyOption(click.Option):
-    """An option that takes every following value up to the next option: ``--free A B C``.
-
-    Values may also be repeated (``--free A --free B``) or comma-separated. A value that looks
-    like a file (contains '.' or '/') ends the list, so ``--free A data.csv`` still works.
+    Before click parses the command line, ``--free A B C`` is rewritten as ``--free A --free B
+    --free C``: the values run to the next option, or to a value that looks like a file
+    (contains '.' or '/'), so ``--free A data.csv`` still reads data.csv as an argument.
+    Values may also be repeated (``--free A --free B``) or comma-separated.
     """
 
-    def add_to_parser(self, parser, ctx):
-        ret = super().add_to_parser(parser, ctx)
-        opt = None
-        for name in self.opts:
-            opt = getattr(parser, "_long_opt", {}).get(name) or getattr(parser, "_short_opt", {}).get(name)
-            if opt is not None:
+    list_options = ("--free",)
+
+    def parse_args(self, ctx, args):
+        out, rest = [], list(args)
+        while rest:
+            arg = rest.pop(0)
+            out.append(arg)
+            if arg == "--":
+                out += rest
                 break
-        if opt is None:  # pragma: no cover - parser internals changed: plain (repeatable) option
-            return ret
-        previous = opt.process
-
-        def process(value, state):
-            values = [value]
-            while state.rargs and not state.rargs[0].startswith("-") and "." not in state.rargs[0] and "/" not in state.rargs[0]:
-                values.append(state.rargs.pop(0))
-            for v in values:
-                previous(v, state)
-
-        opt.process = process
-        return ret
+            if arg in self.list_options and rest:
+                out.append(rest.pop(0))
+                while rest and not rest[0].startswith("-") and "." not in rest[0] and "/" not in rest[0]:
+                    out += [arg, rest.pop(0)]
+        return super().parse_args(ctx, out)
 
 
 def _split_names(values) -> list[str]:
@@ -254,31 +268,33 @@ def _split_names(values) -> list[str]:
     return out
 
 
-def _base_config(config_path, assignments, grid, preset=None):
-    cfg = load_config(config_path, assignments, preset)
-    return cfg.replace(grid=grid) if grid else cfg
-
-
 @main.command(name="reproduce", short_help="Regenerate the paper's Figs. 3-12, their CSVs and a trend-table report.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="reproduction", show_default=True, help="Directory for the ten PNG + CSV figures, trends.csv, REPORT.md and REPORT.html.")
-@click.option("--grid", type=click.Choice(["coarse", "default", "fine"]), default="default", show_default=True, help="Grid of every solve.")
-@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the figures do not vary (e.g. from `cmpsim calibrate`); inputs it does not set are the paper preset's.")
-def reproduce_command(out_dir, grid, config_path):
+@config_options
+def reproduce_command(out_dir, config_path, preset, assignments, grid):
     """Regenerate the paper's Figs. 3-12, their CSVs and a report with the trend table.
 
     Solves every equilibrium behind the figures (load 2-6 psi, speed 30-90 rpm; the paper's
     curves), writes figNN_*.png and figNN_*.csv, and checks each qualitative statement the
     paper makes about them against the data of the run (REPORT.md / REPORT.html, trends.csv).
+    The inputs set the parameters the figures do not vary.
     """
     from .reproduction import reproduce
 
     try:
-        cfg = load_config(config_path, (), "paper")  # the paper's figures: the paper's model
+        cfg = load_config(config_path, assignments, preset or "paper", grid)  # the paper's figures: the paper's model by default
     except ValueError as exc:
         _fail(str(exc))
-    command = "cmpsim reproduce" + (f" --out {out_dir}" if out_dir != "reproduction" else "") + (f" --grid {grid}" if grid != "default" else "") + (f" --config {config_path}" if config_path else "")
+    command = " ".join(
+        ["cmpsim reproduce"]
+        + ([f"--out {out_dir}"] if out_dir != "reproduction" else [])
+        + ([f"--preset {preset}"] if preset else [])
+        + ([f"--config {config_path}"] if config_path else [])
+        + [f"--set {a}" for a in assignments]
+        + ([f"--grid {grid}"] if grid else [])
+    )
     try:
-        rep = reproduce(out=out_dir, grid=grid, progress=True, config=cfg, command=command)
+        rep = reproduce(out=out_dir, progress=True, config=cfg, command=command)
     except (ValueError, OSError) as exc:
         _fail(str(exc))
     from rich.console import Console
@@ -297,13 +313,10 @@ def reproduce_command(out_dir, grid, config_path):
 
 @main.command(name="validate")
 @click.argument("data", nargs=-1, type=click.Path(dir_okay=False))
-@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file with the inputs the data do not set (e.g. from `cmpsim calibrate`).")
-@click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units (repeatable).")
-@click.option("--grid", default=None, help="Grid preset (coarse, default, fine) or NRxNT; default: the configuration's.")
+@config_options
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="validation", show_default=True, help="Directory for parity.png, points.csv and datasets.csv.")
 @click.option("--markdown", is_flag=True, help="Print the tables as Markdown instead of rich tables.")
-@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
-def validate_command(data, config_path, assignments, grid, out_dir, markdown, preset):
+def validate_command(data, config_path, preset, assignments, grid, out_dir, markdown):
     """Compare the model with measured data; with no DATA, every data set shipped with cmpsim.
 
     DATA are CSV files in the format of cmpsim/data/README.md (operating conditions with
@@ -314,7 +327,7 @@ def validate_command(data, config_path, assignments, grid, out_dir, markdown, pr
     from .validation import validate
 
     try:
-        cfg = _base_config(config_path, assignments, grid, preset)
+        cfg = load_config(config_path, assignments, preset, grid)
         report = validate(list(data) or None, config=cfg, progress=not markdown)
     except ValueError as exc:
         _fail(str(exc))
@@ -340,18 +353,15 @@ def validate_command(data, config_path, assignments, grid, out_dir, markdown, pr
     )
 
 
-@main.command(name="calibrate")
+@main.command(name="calibrate", cls=_ListOptionsCommand)
 @click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--free", "free", cls=_GreedyOption, multiple=True, required=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius.")
+@click.option("--free", "free", multiple=True, required=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius (or repeated, or comma-separated).")
 @click.option("--bounds", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Bounds with units, e.g. --bounds pad_modulus=20MPa:500MPa (repeatable; default a factor 10 either side).")
-@click.option("--config", "config_path", type=click.Path(dir_okay=False), help="Starting configuration (TOML).")
-@click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units (repeatable).")
-@click.option("--grid", default=None, help="Grid preset or NRxNT; default: the configuration's.")
-@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="Fitted configuration, accepted by `cmpsim run`, `validate --config` and `reproduce --config`.")
+@config_options
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="Fitted configuration, accepted by every command's --config (and `cmpsim run FILE`).")
 @click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser.")
 @click.option("--quiet", is_flag=True, help="Do not print the evaluations while fitting.")
-@click.option("--preset", type=click.Choice(["default", "paper"]), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model (docs/model.md).")
-def calibrate_command(data, free, bounds, config_path, assignments, grid, out_path, max_evaluations, quiet, preset):
+def calibrate_command(data, free, bounds, config_path, preset, assignments, grid, out_path, max_evaluations, quiet):
     """Fit uncertain inputs to measurements (scipy least_squares, bounded).
 
     Reports fitted values with standard errors and 95 % intervals, their correlations and
@@ -368,7 +378,7 @@ def calibrate_command(data, free, bounds, config_path, assignments, grid, out_pa
             name, rng = item.split("=", 1)
             lo, hi = rng.split(":", 1)
             bnds[name.strip().replace("-", "_")] = (lo.strip(), hi.strip())
-        cfg = _base_config(config_path, assignments, grid, preset)
+        cfg = load_config(config_path, assignments, preset, grid)
         result = calibrate(list(data), names, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
     except ValueError as exc:
         _fail(str(exc))
@@ -378,7 +388,6 @@ def calibrate_command(data, free, bounds, config_path, assignments, grid, out_pa
         _fail(f"cannot write {out_path}: {exc}")
     click.echo(result.summary())
     click.echo(f"wrote {out_path}")
-# ---- end reproduce/validate/calibrate commands ----
 
 
 # ---- serve command (web/) ----

@@ -16,10 +16,10 @@ asymmetric for log-fitted parameters). The fitted configuration is written with
 :meth:`Config.to_toml` and is accepted by every command (``cmpsim run CONFIG``,
 ``cmpsim validate --config``, ``cmpsim reproduce --config``).
 
-Rooms: :mod:`~cmpsim.calibration.request` (what may be fitted; the checks of a request),
-:mod:`~cmpsim.calibration.residuals` (the whitened residuals as a function of the fit
-variables), :mod:`~cmpsim.calibration.uncertainty` (covariance, standard errors, intervals),
-:mod:`~cmpsim.calibration.result` (:class:`CalibrationResult` and its report);
+Rooms: ``request`` (what may be fitted; the checks of a request),
+``residuals`` (the whitened residuals as a function of the fit
+variables), ``uncertainty`` (covariance, standard errors, intervals),
+``result`` (:class:`CalibrationResult` and its report);
 :func:`calibrate` runs them in order.
 """
 

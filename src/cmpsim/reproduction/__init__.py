@@ -15,9 +15,9 @@ other input from :meth:`Config.default` (or the ``config`` given):
 * Figs. 5-6: LEP, sigma = 15 um, d = 100 and 200 nm (film thickness and attack angle).
 * Figs. 7-12: LEP, cases (a) d = 100 nm, sigma = 15 um; (b) 100 nm, 20 um; (c) 200 nm, 20 um.
 
-Rooms: :mod:`~cmpsim.reproduction.paper` (the curves and figures of the paper and the
-equilibria behind them), :mod:`~cmpsim.reproduction.checks` (the paper's statements and
-their checks), :mod:`~cmpsim.reproduction.report` (figures, CSVs, REPORT.md/.html);
+Rooms: ``paper`` (the curves and figures of the paper and the
+equilibria behind them), ``checks`` (the paper's statements and
+their checks), ``report`` (figures, CSVs, REPORT.md/.html);
 :func:`reproduce` runs the three in order.
 """
 
@@ -47,15 +47,15 @@ __all__ = [
 ]
 
 
-def reproduce(out=None, grid: str = "default", progress: bool = True, config: Config | None = None, command: str | None = None) -> ReproductionReport:
+def reproduce(out=None, grid: str | None = None, progress: bool = True, config: Config | None = None, command: str | None = None) -> ReproductionReport:
     """Regenerate Figs. 3-12 of the paper, their CSVs, the trend table and REPORT.md/.html.
 
     Parameters
     ----------
     out : path, optional
         Output directory (created; default ``./reproduction``).
-    grid : {"coarse", "default", "fine"} or "NRxNT"
-        Grid of every solve.
+    grid : {"coarse", "default", "fine"} or "NRxNT", optional
+        Grid of every solve; default: the configuration's (``"default"``).
     progress : bool
         Show a rich progress bar.
     config : Config, optional
@@ -72,7 +72,9 @@ def reproduce(out=None, grid: str = "default", progress: bool = True, config: Co
     t0 = time.perf_counter()
     out = Path(out if out is not None else "reproduction")
     out.mkdir(parents=True, exist_ok=True)
-    base = (config or Config.paper()).replace(grid=grid)
+    base = config or Config.paper()
+    if grid is not None:
+        base = base.replace(grid=grid)
     data, n_eq, n_fact, failures, solve_s = _solve_all(base, progress)
     figures = []
     for spec in FIGURES:
@@ -104,7 +106,7 @@ def reproduce(out=None, grid: str = "default", progress: bool = True, config: Co
         notes=_notes(data, failures),
     )
     rep.elapsed_s = time.perf_counter() - t0
-    command = command or f"cmpsim reproduce --out {out} --grid {grid}"
+    command = command or f"cmpsim reproduce --out {out} --grid {base.numerics.grid}"
     blocks = _blocks(rep, command)
     atomic_write_text(rep.report_md, _render_md(blocks, out))
     atomic_write_text(rep.report_html, _render_html(blocks, out))

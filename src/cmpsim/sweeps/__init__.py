@@ -3,7 +3,8 @@
 A sweep file (TOML, see docs/sweeps.md and ``cmpsim/data/example_sweep.toml``) holds
 
 * ``[base]``: any ``cmpsim run`` setting (same names, values with units), flat or in the
-  sections of a config file (``[base.process]``);
+  sections of a config file (``[base.process]``); ``preset = "paper"`` starts from that
+  preset (:meth:`cmpsim.Config.from_mapping`);
 * ``[axes]``: one key per swept setting, a list (``applied_pressure = ["2psi", "4psi"]``) or a
   range (``rotation_speed = {start = "30rpm", stop = "90rpm", num = 7}``, optional
   ``scale = "log"``); the sweep is their outer product;
@@ -36,10 +37,10 @@ file is in place.
 
 Rooms
 -----
-:mod:`~cmpsim.sweeps.spec` (the sweep file and its layout), :mod:`~cmpsim.sweeps.plan`
-(identity, chains, warm-start prediction), :mod:`~cmpsim.sweeps.executors` (the task of one
-point; serial and Dask execution), :mod:`~cmpsim.sweeps.state` (the ``PATH.parts/``
-directory), :mod:`~cmpsim.sweeps.dataset` (the xarray result, its file and summary);
+``spec`` (the sweep file and its layout), ``plan``
+(identity, chains, warm-start prediction), ``executors`` (the task of one
+point; serial and Dask execution), ``state`` (the ``PATH.parts/``
+directory), ``dataset`` (the xarray result, its file and summary);
 :func:`sweep` connects them.
 """
 

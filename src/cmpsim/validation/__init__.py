@@ -23,9 +23,9 @@ Comparison modes
 
 ``validate()`` with no argument runs every data set shipped in ``cmpsim/data``.
 
-Rooms: :mod:`~cmpsim.validation.data` (the file format, the quantities, reading),
-:mod:`~cmpsim.validation.compare` (the model's values and the verdicts),
-:mod:`~cmpsim.validation.report` (tables and the parity plot); :func:`validate` runs them in
+Rooms: ``data`` (the file format, the quantities, reading),
+``compare`` (the model's values and the verdicts),
+``report`` (tables and the parity plot); :func:`validate` runs them in
 order.
 """
 
@@ -66,6 +66,7 @@ from .report import ValidationReport
 __all__ = [
     "QUANTITIES",
     "COMPARISONS",
+    "DataError",
     "DataPoint",
     "Dataset",
     "PointResult",
