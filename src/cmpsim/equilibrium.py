@@ -834,8 +834,8 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
     """The safeguarded Newton loop of :func:`solve_equilibrium`: (u, state, steps, history)."""
     history = [(u.copy(), st.residual.copy())]
     it = 0
-    # trust radius (sigma): shrunk to twice the step the line search accepted, regrown by 2 on
-    # every full step, so that a step that had to be cut is not retried from max_step
+    # trust radius (sigma): on a rigid pad shrunk to twice the step the line search accepted,
+    # regrown by 2 on every full step, so that a step that had to be cut is not retried from max_step
     trust = max_step
     while _merit(st.residual) >= tol:
         if it >= max_iter:
@@ -868,7 +868,11 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
                 "line search failed: no step along the Newton direction lowers the residual; the "
                 f"equilibrium may not exist for these inputs{reason}; {_diagnosis(problem, st)}"
             )
-        trust = min(max_step, 2.0 * trust) if alpha == 1.0 else max(2.0 * alpha * size, 1e-6)
+        if problem.foundation is None:
+            trust = min(max_step, 2.0 * trust) if alpha == 1.0 else max(2.0 * alpha * size, 1e-6)
+        # with a compliant pad the radius stays at max_step: shrinking it stalled the outer Newton
+        # on the default model under Thakurta's conditions (coarse grid), where the fixed radius
+        # converges (tests/test_validation.py)
         u, st = trial, new
         history.append((u.copy(), st.residual.copy()))
     return u, st, it, history
