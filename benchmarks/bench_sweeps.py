@@ -119,7 +119,7 @@ def main() -> None:
         it_w, it_c = int(warm["iterations"].values[ok].sum()), int(cold["iterations"].values[ok].sum())
         fa_w, fa_c = int(warm["factorizations"].values[ok].sum()), int(cold["factorizations"].values[ok].sum())
         dev = float(
-            np.max(np.abs(warm["film_thickness_center_m"].values[ok] / cold["film_thickness_center_m"].values[ok] - 1.0))
+            np.max(np.abs(warm["film_thickness_center"].values[ok] / cold["film_thickness_center"].values[ok] - 1.0))
         )
         print(f"warm vs cold start, {model} ({int(ok.sum())} of {n} points converged both ways), serial:")
         print(f"  throughput warm / cold:      {t_cold / t_warm:.2f} x  ({n / t_warm:.2f} vs {n / t_cold:.2f} points/s)")

@@ -24,9 +24,10 @@ def test_import_cmpsim_loads_no_plotting_dask_or_xarray_and_writes_nothing(tmp_p
 def test_solve_returns_every_json_scalar_as_si_attribute():
     r = cmpsim.solve(grid="coarse")
     data = json.loads(r.to_json())
-    for key, value in data.items():
+    scalars = {**data["values"], **data["solver"]}
+    for key, value in scalars.items():
         assert getattr(r, key) == value or (value is None and not math.isfinite(getattr(r, key)))
-    assert r.to_dict() == r.scalars
+    assert scalars == r.scalars
 
 
 def test_solve_accepts_strings_quantities_and_si_floats_alike():
@@ -36,7 +37,7 @@ def test_solve_accepts_strings_quantities_and_si_floats_alike():
     a = cmpsim.solve(grid="coarse", applied_pressure="3 psi", relative=False)
     b = cmpsim.solve(grid="coarse", applied_pressure=3 * ureg.psi, relative=False)
     c = cmpsim.solve(grid="coarse", applied_pressure=3 * 6894.757293168361, relative=False)
-    assert a.film_thickness_center_m == b.film_thickness_center_m == pytest.approx(c.film_thickness_center_m, rel=1e-12)
+    assert a.film_thickness_center == b.film_thickness_center == pytest.approx(c.film_thickness_center, rel=1e-12)
 
 
 def test_api_and_cli_share_error_messages():
@@ -56,16 +57,16 @@ def test_fields_are_on_the_wafer_with_units_and_nan_outside():
     X, Y = np.meshgrid(ds.x.values, ds.y.values)
     outside = X**2 + Y**2 > (0.5 * r.config.wafer_diameter) ** 2 * (1 + 1e-9)
     for name in ("film_thickness", "slurry_pressure", "contact_pressure", "removal_rate",
-                 "area_ratio_elastic", "area_ratio_elastoplastic", "area_ratio_plastic"):
+                 "contact_area_ratio_elastic", "contact_area_ratio_elastoplastic", "contact_area_ratio_plastic"):
         v = ds[name].values
         assert np.all(np.isnan(v[outside])) and np.all(np.isfinite(v[~outside])), name
         assert "units" in ds[name].attrs
     assert ds.x.attrs["units"] == "m"
     # the map reproduces the analytic centre film thickness and the wafer-mean contact ratios
     n = len(ds.x) // 2
-    assert ds.film_thickness.values[n, n] == pytest.approx(r.film_thickness_center_m, rel=1e-9)
+    assert ds.film_thickness.values[n, n] == pytest.approx(r.film_thickness_center, rel=1e-9)
     for kind in ("elastic", "elastoplastic"):  # pixel mean over the disk vs the area integral on the polar grid
-        assert np.nanmean(ds[f"area_ratio_{kind}"].values) == pytest.approx(r.scalars[f"contact_area_ratio_{kind}"], rel=1e-2), kind
+        assert np.nanmean(ds[f"contact_area_ratio_{kind}"].values) == pytest.approx(r.scalars[f"contact_area_ratio_{kind}"], rel=1e-2), kind
 
 
 def test_to_netcdf_round_trips_fields_and_scalars(tmp_path):
@@ -75,7 +76,7 @@ def test_to_netcdf_round_trips_fields_and_scalars(tmp_path):
     path = r.to_netcdf(tmp_path / "r.nc")
     ds = xr.open_dataset(path)
     np.testing.assert_allclose(ds.film_thickness.values, r.fields.film_thickness.values)
-    assert ds.attrs["attack_angle_rad"] == r.attack_angle_rad
+    assert ds["attack_angle"].item() == r.attack_angle and ds["attack_angle"].attrs["units"] == "rad"
     assert cmpsim.Config.from_mapping(__import__("tomllib").loads(ds.attrs["config_toml"])) == r.config
     ds.close()
 
@@ -101,14 +102,17 @@ def test_provenance_names_model_version_and_every_parameter_with_its_source():
 def test_summary_lists_every_scalar_with_its_display_unit():
     import re
 
-    from cmpsim.result import SCALARS
+    from cmpsim import outputs
 
     r = cmpsim.solve(grid="coarse")
-    lines = r.summary().splitlines()
-    for key in r.scalars:
-        line = next(ln for ln in lines if ln.split()[:1] == [key])
-        name, value, unit, *_ = re.split(r"\s{2,}", line.strip())
-        assert unit == SCALARS[key][2], key
+    lines = r.summary(width=250).splitlines()
+    header = [c.strip() for c in re.split(r"[│┃]", next(ln for ln in lines if ln.startswith("┃")))[1:-1]]
+    cells = {c[0]: c for c in ([x.strip() for x in re.split(r"[│┃]", ln)[1:-1]] for ln in lines if ln.startswith("│")) if c and c[0]}
+    shown = [n for n in outputs.scalar_names() if n in r.scalars]
+    assert shown and set(shown) <= set(cells)
+    for name in shown:
+        assert cells[name][header.index("unit")] == (outputs.scalar(name).display_unit or "-"), name
+
 
 
 def test_field_maps_keep_the_solver_identities_up_to_the_rim():

@@ -23,15 +23,19 @@ def _lub(sigma=15e-6, mode="sliding"):
     return LubricationParameters(100e-9, 4e-6, 1.0, 3 * U, RoughnessGeometry(sigma), kin, slurry_model="newtonian", viscosity=ETA)
 
 
+def _strips():
+    """The diverging slider on 100-800 cells, smooth surfaces (1-D finite volumes of the wafer's kernels)."""
+    return [strip_problem(n, L, H1, H2, _lub(1e-12)) for n in (100, 200, 400, 800)]
+
+
 @pytest.mark.parametrize("p_cav", [-5e3, -20e3])
 def test_gumbel_slider_load_is_the_integral_of_the_clipped_analytic_pressure(p_cav):
     """Diverging plane slider, smooth surfaces: integral of max(p, p_cav) vs the analytic p."""
     exact = gumbel_load(L, H1, H2, ETA, U, p_cav)
     errs = []
-    for n in (100, 200, 400, 800):
-        s = strip_problem(n, L, H1, H2, _lub(1e-12))
+    for s in _strips():
         p = spla.spsolve(s.A.tocsc(), s.rhs)
-        np.testing.assert_allclose(p, linear_film_pressure(s.x, L, H1, H2, ETA, U), atol=2e-3 * abs(p).max() * (100 / n) ** 2)
+        np.testing.assert_allclose(p, linear_film_pressure(s.x, L, H1, H2, ETA, U), atol=2e-3 * abs(p).max() * (s.dx * 100 / L) ** 2)
         errs.append(abs(np.maximum(p, p_cav).sum() * s.dx / exact - 1))
     print(f"\nGumbel slider, p_cav = {p_cav:g} Pa: load errors {errs}")
     # the clipped integrand has kinks that fall anywhere in a cell: second order on average
@@ -44,8 +48,7 @@ def test_jfo_slider_matches_the_semi_analytic_rupture_reformation_and_fill_fract
     """Diverging slider: rupture (p = p_cav, p' = 0), cavitated zone theta = h_c/h, reformation."""
     ref = jfo_diverging_slider(L, H1, H2, ETA, U, p_cav)
     rows = []
-    for n in (100, 200, 400, 800):
-        s = strip_problem(n, L, H1, H2, _lub(1e-12))
+    for s in _strips():
         p, r, cav, _, it = solve_complementarity(s.A, s.B, s.rhs, p_cav)
         theta = 1 - r
         assert np.all(p[cav] == p_cav) and np.all(r[~cav] == 0) and np.all(p >= p_cav) and np.all(theta[cav] < 1)

@@ -19,8 +19,8 @@ def test_values_take_units_and_are_stored_in_si():
     assert Config.default().replace(applied_pressure="27.6kPa").applied_pressure == pytest.approx(27600)
 
 
-def test_default_is_the_papers_base_case():
-    c = Config.default()
+def test_paper_preset_is_the_papers_base_case():
+    c = Config.paper()
     assert c.applied_pressure == pytest.approx(parse_value("applied_pressure", "4 psi"))
     assert c.rotation_speed == pytest.approx(parse_value("rotation_speed", "60 rpm"))
     assert c.particle_diameter == pytest.approx(100e-9)

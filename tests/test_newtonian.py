@@ -138,7 +138,7 @@ def test_newtonian_result_reports_gauge_fields_and_fluid_share():
     np.testing.assert_array_equal(r.polar["slurry_pressure"], (1 - ar) * st.p_slurry)
     assert r.fluid_load_fraction == pytest.approx(g.integrate(r.polar["slurry_pressure"]) / r.problem.load_scale, rel=1e-14)
     assert r.fluid_load_fraction + r.contact_load_fraction == pytest.approx(1.0, abs=1e-9)
-    assert r.ambient_pressure_pa == 0.0 and st.p_slurry.min() < 0 < st.p_slurry.max()
+    assert r.ambient_pressure == 0.0 and st.p_slurry.min() < 0 < st.p_slurry.max()
     assert "fill_fraction" not in r.polar
 
 

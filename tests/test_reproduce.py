@@ -118,7 +118,7 @@ def test_verdicts_are_computed_from_the_data(report):
     assert base["S01"] is True  # film falls with load on the LEP curve (this model reproduces it)
     data = copy.deepcopy(report.data)
     for p in data.curve("lep_s15", "load"):
-        p.scalars["film_thickness_center_m"] = 1e-6 * p.x  # now rising with load
+        p.scalars["film_thickness_center"] = 1e-6 * p.x  # now rising with load
     flipped = {r.id: r for r in evaluate_statements(data)}
     assert flipped["S01"].reproduced is False
     assert "rises between" in flipped["S01"].why_not
@@ -135,7 +135,7 @@ def test_slight_criterion_uses_the_base_value(report):
         for sweep in ("load", "speed"):
             for p in data.curve(c, sweep):
                 x = p.x if sweep == "load" else p.x / 15.0
-                p.scalars["attack_angle_rad"] = 1e-5 * (1.0 - 0.01 * x)  # falls by a few % only
+                p.scalars["attack_angle"] = 1e-5 * (1.0 - 0.01 * x)  # falls by a few % only
     res = {r.id: r for r in evaluate_statements(data)}
     assert res["S11"].reproduced and res["S12"].reproduced
     assert not res["S15"].reproduced  # falling with speed, the paper says rising

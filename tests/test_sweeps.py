@@ -21,6 +21,7 @@ from click.testing import CliRunner
 import cmpsim
 from cmpsim.cli import main
 from cmpsim.config import PARAMETERS, Config, parse_value
+from cmpsim import outputs
 from cmpsim.result import SCALARS
 from cmpsim.sweeps import SweepError, SweepSpec, sweep
 
@@ -66,7 +67,8 @@ def run_json(settings: dict, extra=("grid=coarse",)) -> dict:
         args += ["--set", f"{k}={v}" if isinstance(v, str) else f"{k}={v!r} {PARAMETERS[k].unit}"]
     res = CliRunner().invoke(main, args)
     assert res.exit_code == 0, res.output
-    return json.loads(res.stdout)
+    data = json.loads(res.stdout)
+    return {**data["values"], **data["solver"]}  # the scalars, as the sweep dataset holds them
 
 
 # ---------------------------------------------------------------------------- equality with cmpsim run
@@ -172,7 +174,7 @@ def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path)
     # tamper with one saved point: if resume recomputed it, the mark would disappear
     victim = next(p for p in parts.iterdir() if p.name != "manifest.json" and p.suffix == ".json")
     rec = json.loads(victim.read_text())
-    rec["scalars"]["removal_rate_nm_per_min"] = -123.0
+    rec["scalars"]["removal_rate_mean"] = -123.0
     victim.write_text(json.dumps(rec))
 
     res = subprocess.run(CLI + ["sweep", str(path), "--out", str(out), "--resume", "--no-progress"], capture_output=True, text=True, timeout=180)
@@ -184,9 +186,9 @@ def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path)
 
     resumed = open_nc(out)
     sel = dict(zip(resumed["status"].dims, rec["index"]))
-    assert resumed["removal_rate_nm_per_min"].isel(sel).item() == -123.0  # reused, not recomputed
+    assert resumed["removal_rate_mean"].isel(sel).item() == -123.0  # reused, not recomputed
     reference = sweep(path, out=tmp_path / "reference.nc", workers=0, progress=False)
-    resumed["removal_rate_nm_per_min"][sel] = reference["removal_rate_nm_per_min"].isel(sel).item()
+    resumed["removal_rate_mean"][sel] = reference["removal_rate_mean"].isel(sel).item()
     xr.testing.assert_identical(resumed, open_nc(tmp_path / "reference.nc"))
     assert (resumed["status"].values == "ok").all() and resumed["status"].size == 24
 
@@ -289,8 +291,8 @@ dome_height = ["5um", "50mm"]
     res = CliRunner().invoke(main, ["run", "--json", "--set", "grid=coarse", "--set", "applied_pressure=1000psi"])
     assert res.exit_code == 3
     assert err[2, 0] and err[2, 0] in res.stderr
-    assert err[1, 0] == "" and np.isfinite(ds["film_thickness_center_m"].values[1, 0])
-    assert np.isnan(ds["film_thickness_center_m"].values[2, 0]) and ds["iterations"].values[2, 0] == -1
+    assert err[1, 0] == "" and np.isfinite(ds["film_thickness_center"].values[1, 0])
+    assert np.isnan(ds["film_thickness_center"].values[2, 0]) and ds["iterations"].values[2, 0] == -1
     assert ds.attrs["points_failed"] == 1 and ds.attrs["points_invalid"] == 4
     xr.testing.assert_identical(open_nc(tmp_path / "f.nc"), ds)
 
@@ -335,7 +337,7 @@ def test_zarr_path_writes_a_zarr_store_equal_to_the_netcdf_result(tmp_path):
     nc = sweep(spec, out=tmp_path / "x.nc", workers=0, progress=False)
     zr = sweep(spec, out=tmp_path / "x.zarr", workers=0, progress=False)
     stored = xr.open_zarr(tmp_path / "x.zarr").load()
-    for name in ("film_thickness_center_m", "attack_angle_rad", "status"):
+    for name in ("film_thickness_center", "attack_angle", "status"):
         np.testing.assert_array_equal(stored[name].values, nc[name].values)
         np.testing.assert_array_equal(zr[name].values, nc[name].values)
     assert stored["applied_pressure"].attrs["units"] == nc["applied_pressure"].attrs["units"]
@@ -370,7 +372,7 @@ applied_pressure = "3psi"
     extra = ds.sel(model="lep", particle_diameter=ds["particle_diameter"][1]).isel(applied_pressure=2)
     assert extra["status"].item() == "ok"
     ref = cmpsim.solve(grid="coarse", applied_pressure="4psi", particle_diameter="150nm")
-    assert extra["film_thickness_center_m"].item() == pytest.approx(ref.film_thickness_center_m, rel=1e-6)
+    assert extra["film_thickness_center"].item() == pytest.approx(ref.film_thickness_center, rel=1e-6)
 
 
 def test_output_file_holds_config_version_and_sweep_and_appears_atomically(tmp_path):
@@ -383,8 +385,14 @@ def test_output_file_holds_config_version_and_sweep_and_appears_atomically(tmp_p
     assert disk.attrs["cmpsim_version"] == cmpsim.__version__
     assert disk.attrs["sweep_toml"] == path.read_text()
     assert Config.from_mapping(tomllib.loads(disk.attrs["config_toml"])) == Config.default().replace(particle_diameter="200nm", grid="coarse")
+    assert disk.attrs["Conventions"] == "CF-1.11"
     for k in SCALARS:
-        assert k in disk.data_vars and disk[k].attrs["units"] == SCALARS[k][0]
+        o = outputs.scalar(k)
+        assert k in disk.data_vars and disk[k].attrs["long_name"] == o.long_name
+        if o.dtype == "bool":  # a CF flag
+            assert list(disk[k].attrs["flag_values"]) == [0, 1] and disk[k].attrs["flag_meanings"] == "not_converged converged"
+        else:
+            assert disk[k].attrs["units"] == SCALARS[k][0]
 
 
 def test_shipped_example_sweep_file_is_valid():
@@ -412,7 +420,7 @@ def test_warm_start_agrees_with_cold_start_and_never_costs_more_solves(model, ax
     cold = sweep(spec, workers=0, progress=False, warm_start=False)
     assert (warm["status"].values == "ok").all() and (cold["status"].values == "ok").all()
     assert (warm["start"].values == "warm").sum() == 4
-    for k in ("film_thickness_center_m", "film_thickness_min_m", "attack_angle_rad", "fluid_load_fraction", "removal_rate"):
+    for k in ("film_thickness_center", "film_thickness_min", "attack_angle", "fluid_load_fraction", "removal_rate_mean"):
         np.testing.assert_allclose(warm[k], cold[k], rtol=1e-6, err_msg=k)
     assert int(warm["factorizations"].sum()) <= int(cold["factorizations"].sum())
     assert int(warm["iterations"].sum()) <= int(cold["iterations"].sum())

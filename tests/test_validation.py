@@ -110,7 +110,7 @@ def _write(tmp_path, text, name="mine.csv"):
 
 def test_a_users_own_file_is_compared(tmp_path):
     r = cmpsim.solve(grid="coarse", applied_pressure="3 psi", relative=False)
-    h = r.film_thickness_center_m * 1e6
+    h = r.film_thickness_center * 1e6
     p = _write(
         tmp_path,
         "# citation: my lab notebook\n"
@@ -189,4 +189,4 @@ def test_every_quantity_has_a_unit_and_an_extractor():
     for q, (unit, disp, desc, fn) in QUANTITIES.items():
         v = fn(r)
         assert np.isfinite(v), q
-    assert QUANTITIES["friction_coefficient"][3](r) == pytest.approx(r.mean_shear_stress_pa / r.config.applied_pressure)
+    assert QUANTITIES["friction_coefficient"][3](r) == pytest.approx(r.shear_stress_mean / r.config.applied_pressure)

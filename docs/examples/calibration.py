@@ -87,7 +87,7 @@ lines = [
 ]
 for psi in pressures_psi:
     for rpm in speeds_rpm:
-        rr = cmpsim.solve(truth.replace(applied_pressure=f"{psi} psi", rotation_speed=f"{rpm} rpm")).removal_rate_nm_per_min
+        rr = cmpsim.solve(truth.replace(applied_pressure=f"{psi} psi", rotation_speed=f"{rpm} rpm")).removal_rate_mean * 1e9 * 60
         sd = 0.03 * rr
         lines.append(f"my_polisher,removal_rate,{rr + sd * rng.standard_normal():.1f},nm/min,{sd:.2f},absolute,{psi:g} psi,{rpm:g} rpm,synthetic")
 data_file = OUT / "my_measurements.csv"
@@ -114,7 +114,7 @@ fig, ax = plt.subplots(figsize=(7, 4.6), layout="constrained")
 for k, rpm in enumerate(speeds_rpm):
     color = f"C{k}"
     for config, style, label in ((base, ":", "defaults"), (calibrated, "-", "calibrated")):
-        rr = [cmpsim.solve(config.replace(applied_pressure=f"{p} psi", rotation_speed=f"{rpm} rpm"), relative=False).removal_rate_nm_per_min for p in p_line]
+        rr = [cmpsim.solve(config.replace(applied_pressure=f"{p} psi", rotation_speed=f"{rpm} rpm"), relative=False).removal_rate_mean * 1e9 * 60 for p in p_line]
         ax.plot(p_line, rr, style, color=color, label=f"{rpm:.0f} rpm, {label}")
     ax.errorbar(pressures_psi, measured[:, k], yerr=errors[:, k], fmt="o", color=color, capsize=3, label=f"{rpm:.0f} rpm, data")
 ax.set_xlabel("applied pressure (psi)")

@@ -5,16 +5,19 @@ maps of every field. Inputs take units as strings (`"3 psi"`, `"75 rpm"`, `"150 
 quantities, or plain numbers in SI; every input, its unit, valid range and source is listed by
 `cmpsim params` and in the [parameter table](../model.md#15-parameter-table).
 
-The same run from the command line writes the maps, the fields (NetCDF), the scalars (JSON)
-and the full input set (TOML) to one folder:
+The same run from the command line writes the maps, the removal profile, the fields and
+scalars (CF NetCDF), the result (JSON) and the full input set (TOML) to one folder:
 
 ```bash
 cmpsim run --set applied_pressure=3psi --set rotation_speed=75rpm --set particle_diameter=150nm --out results/
 ```
 
-The result object holds every scalar as an attribute in SI (`result.attack_angle_rad`),
+The result object holds every scalar as an attribute in SI (`result.attack_angle`, in rad;
+the names, units and meanings are in the [output table](../model.md#16-outputs)),
 `result.fields` (an `xarray.Dataset` of the wafer maps on a Cartesian grid, in SI, with units in
-the attributes and NaN outside the wafer), `result.summary()`, `result.to_json()`,
+the attributes and NaN outside the wafer), the rotation-averaged profiles
+(`result.radius`, `result.removal_rate_profile`, `result.film_thickness_profile`),
+`result.summary()`, `result.to_json()` (the object of `cmpsim run --json`),
 `result.to_netcdf(path)` and `result.provenance` (model variant, version, and every parameter
 with its value and source).
 
@@ -33,6 +36,13 @@ of the removal law RR = K σ<sub>n</sub> τ:
 Profiles through the wafer centre along the sliding direction (x) and across it (y):
 
 ![Profiles through the centre](profiles.png)
+
+What the wafer actually loses: it turns under this stationary map, so a point at radius r
+loses the average of the map along the circle r. That rotation-averaged removal profile gives
+the within-wafer non-uniformity (1σ / mean inside the 3 mm edge exclusion) and the range;
+`cmpsim run --out` writes the same plot as `profile.png`:
+
+![Rotation-averaged removal and film profiles](uniformity.png)
 """
 
 import os
@@ -59,10 +69,11 @@ config.to_toml(OUT / "config.toml")  # every input, SI, reproducible
 result = cmpsim.solve(config)
 print(result.summary())
 print()
-print(f"film thickness at the centre: {result.film_thickness_center_m * 1e6:.3f} um")
-print(f"attack angle:                 {result.attack_angle_rad:.3e} rad")
+print(f"film thickness at the centre: {result.film_thickness_center * 1e6:.3f} um")
+print(f"attack angle:                 {result.attack_angle:.3e} rad")
 print(f"load carried by the slurry:   {100 * result.fluid_load_fraction:.2f} %")
-print(f"removal rate:                 {result.removal_rate_nm_per_min:.1f} nm/min")
+print(f"removal rate (wafer mean):    {result.removal_rate_mean * 1e9 * 60:.1f} nm/min")
+print(f"within-wafer non-uniformity:  {100 * result.within_wafer_nonuniformity:.1f} % (1 sigma / mean)")
 if result.flow_factor_floored_fraction > 0:
     print("warning: flow factors were regularised; see the limitations page")
 
@@ -73,7 +84,7 @@ plt.close(fig)
 
 every_field = (
     "film_thickness", "granular_pressure", "slurry_pressure", "contact_pressure",
-    "area_ratio_elastic", "area_ratio_elastoplastic", "normal_stress", "shear_stress",
+    "contact_area_ratio_elastic", "contact_area_ratio_elastoplastic", "normal_stress", "shear_stress",
 )
 fig = result.plot(fields=every_field)
 fig.savefig(OUT / "all_fields.png", dpi=70)
@@ -100,4 +111,13 @@ for ax, ylabel in zip(axes, ("film thickness (um)", "slurry gauge pressure (kPa)
 axes[0].legend()
 fig.suptitle("Profiles through the wafer centre")
 fig.savefig(OUT / "profiles.png", dpi=80)
+plt.close(fig)
+
+# The rotation-averaged profiles: one value per ring of the grid, at the ring-centre radius.
+print()
+print("radius (mm)  removal rate (nm/min)  film thickness (um)")
+for r, rr, h in zip(result.radius, result.removal_rate_profile, result.film_thickness_profile):
+    print(f"{r * 1e3:11.2f}  {rr * 1e9 * 60:21.1f}  {h * 1e6:19.3f}")
+fig = result.plot_profiles()
+fig.savefig(OUT / "uniformity.png", dpi=80)
 plt.close(fig)

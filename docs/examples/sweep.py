@@ -100,7 +100,7 @@ if __name__ == "__main__":  # needed on platforms that start Dask workers by spa
 
     # The file holds the same dataset (coordinates in SI, units in the attributes).
     with xr.open_dataset(result_file) as on_disk:
-        assert np.allclose(on_disk.film_thickness_center_m.values, ds.film_thickness_center_m.values)
+        assert np.allclose(on_disk.film_thickness_center.values, ds.film_thickness_center.values)
 
     # Selecting and plotting: one line per (particle size, pad roughness).
     fig, axes = plt.subplots(1, 3, figsize=(14, 4.2), layout="constrained")
@@ -109,8 +109,8 @@ if __name__ == "__main__":  # needed on platforms that start Dask workers by spa
         for k, sigma in enumerate(ds.pad_roughness.values):
             point = ds.sel(particle_diameter=d, pad_roughness=sigma)
             label = f"d = {d * 1e9:.0f} nm, sigma = {sigma * 1e6:.0f} um"
-            axes[0].plot(p_psi, point.film_thickness_center_m * 1e6, style, color=f"C{k}", marker="o", label=label)
-            contact = point.contact_area_ratio_elastic + point.contact_area_ratio_elastoplastic + point.contact_area_ratio_plastic
+            axes[0].plot(p_psi, point.film_thickness_center * 1e6, style, color=f"C{k}", marker="o", label=label)
+            contact = point.contact_area_ratio
             axes[1].plot(p_psi, contact, style, color=f"C{k}", marker="o", label=label)
             axes[2].plot(p_psi, point.removal_rate_relative, style, color=f"C{k}", marker="o", label=label)
     for ax, label in zip(axes, ("film thickness at centre (um)", "real contact area / wafer area", "relative removal rate")):

@@ -39,7 +39,7 @@ OUT.mkdir(parents=True, exist_ok=True)
 
 base = cmpsim.Config.default().replace(grid=GRID)
 pressures_psi = np.geomspace(0.5, 250.0, 13)
-names = ("film_thickness_min_m", "flow_factor_floored_fraction", "attack_angle_rad", "fluid_load_fraction")
+names = ("film_thickness_min", "flow_factor_floored_fraction", "attack_angle", "fluid_load_fraction")
 data = {}
 print(f"{'variant':>8} {'P (psi)':>8} {'h_min/sigma':>12} {'floored':>8} {'theta (urad)':>13} {'slurry %':>9}")
 for variant in ("lep", "elastic"):
@@ -48,8 +48,8 @@ for variant in ("lep", "elastic"):
         r = cmpsim.solve(base.replace(model=variant, applied_pressure=f"{psi:.4g} psi"), relative=False)
         rows.append([getattr(r, n) for n in names])
         print(
-            f"{variant:>8} {psi:8.3g} {r.film_thickness_min_m / r.config.pad_roughness:12.3f} {r.flow_factor_floored_fraction:8.3f}"
-            f" {r.attack_angle_rad * 1e6:13.2f} {100 * r.fluid_load_fraction:9.2f}"
+            f"{variant:>8} {psi:8.3g} {r.film_thickness_min / r.config.pad_roughness:12.3f} {r.flow_factor_floored_fraction:8.3f}"
+            f" {r.attack_angle * 1e6:13.2f} {100 * r.fluid_load_fraction:9.2f}"
         )
     data[variant] = np.array(rows).T
 
@@ -69,14 +69,14 @@ in_range = (pressures_psi >= 2.0) & (pressures_psi <= 6.0)
 lep = dict(zip(names, data["lep"]))
 assert np.all(lep["flow_factor_floored_fraction"][in_range] == 0.0)
 assert np.all(lep["flow_factor_floored_fraction"][pressures_psi > 50] > 0.5)
-assert np.all(lep["attack_angle_rad"][pressures_psi > 50] < 0.0)
+assert np.all(lep["attack_angle"][pressures_psi > 50] < 0.0)
 
 sigma = base.pad_roughness
 fig, axes = plt.subplots(2, 2, figsize=(10, 7), layout="constrained", sharex=True)
 panels = (
-    ("film_thickness_min_m", 1 / sigma, "smallest film / pad roughness"),
+    ("film_thickness_min", 1 / sigma, "smallest film / pad roughness"),
     ("flow_factor_floored_fraction", 1.0, "share of regularised flow factors"),
-    ("attack_angle_rad", 1e6, "attack angle (urad)"),
+    ("attack_angle", 1e6, "attack angle (urad)"),
     ("fluid_load_fraction", 100.0, "load carried by the slurry (%)"),
 )
 for ax, (name, scale, label) in zip(axes.flat, panels):

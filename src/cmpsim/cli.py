@@ -84,10 +84,11 @@ def main():
 @main.command()
 @click.argument("config", required=False, type=click.Path(dir_okay=False))
 @config_options
-@click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, result.json and config.toml to DIR.")
+@click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout: schema 2, see cmpsim/data/result.schema.json.")
+@click.option("--schema", "schema", type=click.Choice(["1", "2"]), default="2", show_default=True, help="JSON layout of --json and result.json: 2, or the flat object of cmpsim 0.1 (deprecated).")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, profile.png, result.json and config.toml to DIR.")
 @click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
-def run(config, config_path, preset, assignments, grid, as_json, out_dir, check_roots):
+def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir, check_roots):
     """Solve one operating point (the paper's base case by default).
 
     CONFIG is an optional TOML file, the same as --config (sections `[wafer]` `[process]`
@@ -109,21 +110,18 @@ def run(config, config_path, preset, assignments, grid, as_json, out_dir, check_
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
         _fail(str(exc))
+    schema = int(schema)
+    if schema == 1:
+        click.echo("cmpsim: warning: --schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)", err=True)
     if out_dir:
-        write_outputs(result, Path(out_dir))
+        write_outputs(result, Path(out_dir), schema=schema)
     if as_json:
-        click.echo(result.to_json())
+        click.echo(result.to_json(schema=schema))
         return
     from rich.console import Console
 
     console = Console()
-    console.print(
-        _rich_table(
-            f"cmpsim {cfg.model}: one operating point (grid {cfg.grid_shape[0]}x{cfg.grid_shape[1]})",
-            ["output", "value", "unit", "meaning"],
-            result.summary_rows(),
-        )
-    )
+    console.print(result.summary_table(console.width))
     if result.flow_factor_floored_fraction > 0:
         console.print(
             f"[yellow]warning: the flow-factor tensor was regularised on {100 * result.flow_factor_floored_fraction:.1f} % "
@@ -136,22 +134,22 @@ def run(config, config_path, preset, assignments, grid, as_json, out_dir, check_
             f"(at {roots} rad); the equilibrium above is the one Newton reached from the default start[/yellow]"
         )
     if out_dir:
-        console.print(f"wrote {out_dir}/fields.nc, maps.png, result.json, config.toml")
+        console.print(f"wrote {out_dir}/fields.nc, maps.png, profile.png, result.json, config.toml")
 
 
-def write_outputs(result, out: Path) -> None:
-    """fields.nc, maps.png, result.json, config.toml into ``out`` (each written atomically)."""
+def write_outputs(result, out: Path, schema: int = 2) -> None:
+    """fields.nc, maps.png, profile.png, result.json, config.toml into ``out`` (each written atomically)."""
+    import matplotlib.pyplot as plt
+
     from .io import atomic_path, atomic_write_text
 
     out.mkdir(parents=True, exist_ok=True)
     result.to_netcdf(out / "fields.nc")
-    fig = result.plot()
-    with atomic_path(out / "maps.png", suffix=".png") as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    atomic_write_text(out / "result.json", result.to_json(indent=2) + "\n")
+    for name, fig in (("maps.png", result.plot()), ("profile.png", result.plot_profiles())):
+        with atomic_path(out / name, suffix=".png") as tmp:
+            fig.savefig(tmp, dpi=110, format="png")
+        plt.close(fig)
+    atomic_write_text(out / "result.json", result.to_json(indent=2, schema=schema) + "\n")
     result.config.to_toml(out / "config.toml")
 
 
@@ -166,8 +164,18 @@ def params(markdown):
         return
     from rich.console import Console
 
-    rows = [(n, format_display(n, p.default), p.display or "-", p.range_text(), p.source) for n, p in PARAMETERS.items()]
-    Console().print(_rich_table("cmpsim inputs (set with --set NAME=VALUE)", ["name", "default", "unit", "valid range (SI)", "source"], rows))
+    from .tables import WIDE, legible_table
+
+    console = Console()
+    rows, detail = [], []
+    for n, p in PARAMETERS.items():
+        unit = p.display if p.unit not in ("choice", "grid") else ""
+        default = format_display(n, p.default) + (f" {unit}" if unit else "")
+        # narrow terminals: the default above its valid range, both in the display unit
+        rows.append((n, default, p.display_range_text()) if console.width >= WIDE else (n, f"{default}\n{p.display_range_text()}"))
+        detail.append(f"{p.description}. Source: {p.source}")
+    header = ["name", "default", "valid range"] if console.width >= WIDE else ["name", "default / valid range"]
+    console.print(legible_table("cmpsim inputs (set with --set NAME=VALUE)", header, rows, detail=detail, detail_header="meaning and source", width=console.width))
 
 
 @main.command(name="sweep")
@@ -269,12 +277,13 @@ def reproduce_command(out_dir, config_path, preset, assignments, grid):
     Solves every equilibrium behind the figures (load 2-6 psi, speed 30-90 rpm; the paper's
     curves), writes figNN_*.png and figNN_*.csv, and checks each qualitative statement the
     paper makes about them against the data of the run (REPORT.md / REPORT.html, trends.csv).
-    The inputs set the parameters the figures do not vary.
+    The inputs set the parameters the figures do not vary; they start from the paper preset
+    unless --preset says otherwise.
     """
     from .reproduction import reproduce
 
     try:
-        cfg = load_config(config_path, assignments, preset, grid)
+        cfg = load_config(config_path, assignments, preset or "paper", grid)  # the paper's figures: the paper's model unless told
     except ValueError as exc:
         _fail(str(exc))
     command = " ".join(
@@ -380,6 +389,41 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
         _fail(f"cannot write {out_path}: {exc}")
     click.echo(result.summary())
     click.echo(f"wrote {out_path}")
+
+
+@main.command(name="serve")
+@click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on; anything but loopback warns (then use --token).")
+@click.option("--port", type=click.IntRange(1, 65535), default=8000, show_default=True, help="Port to listen on.")
+@click.option("--token", envvar="CMPSIM_TOKEN", default=None, help="Require this token on every route (env: CMPSIM_TOKEN); open the page as /?token=TOKEN.")
+@click.option("--max-grid", default="fine", show_default=True, help="Largest grid a request may use (preset or NRxNT; compared by cells).")
+@click.option("--max-sweep-points", type=click.IntRange(min=1), default=1000, show_default=True, help="Largest sweep (points) and validation upload (rows).")
+@click.option("--max-jobs", type=click.IntRange(min=1), default=2, show_default=True, help="Solves, validations and sweeps running at once; more get HTTP 429 with Retry-After.")
+@click.option("--max-body", type=click.IntRange(min=1024), default=1_048_576, show_default=True, help="Largest request body in bytes; larger gets HTTP 413.")
+@click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes of the local Dask cluster of the sweeps (default: the machine's cores).")
+@click.option("--scheduler", metavar="ADDRESS", help="Run the sweeps on an existing Dask cluster, e.g. tcp://host:8786.")
+def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_body, workers, scheduler):
+    """Start the browser UI and the JSON HTTP API (needs the extra: pip install "cmpsim[web]").
+
+    The page at / solves operating points, draws the wafer maps and runs sweeps; the API
+    (/api/solve, /api/sweeps, /api/validate, ...; reference at /api/docs) answers what
+    `cmpsim run --json`, `cmpsim sweep` and `cmpsim validate` give. See docs/web.md.
+    """
+    from .web import INSTALL_HINT
+
+    try:
+        from .web.limits import Limits
+        from .web.server import serve
+
+        import fastapi, uvicorn  # noqa: E401,F401 - the web extra
+    except ImportError as exc:
+        _fail(f"`cmpsim serve` needs the web extra ({exc.name or exc} is missing): {INSTALL_HINT}")
+    try:
+        limits = Limits(max_grid=max_grid, max_sweep_points=max_sweep_points, max_jobs=max_jobs, max_body_bytes=max_body)
+    except ValueError as exc:
+        _fail(str(exc).replace("max_grid:", "--max-grid:"))
+    if workers is not None and scheduler is not None:
+        _fail("give either --workers (a local cluster) or --scheduler (an existing cluster), not both")
+    serve(host, port, limits=limits, token=token or None, workers=workers, scheduler=scheduler, echo=click.echo, warn=lambda m: click.echo(m, err=True))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -79,6 +79,16 @@ class Param:
             return _parse_grid(value)
         return _check_range(self, value)
 
+    def display_range_text(self) -> str:
+        """Human-readable valid range, in the display unit (``cmpsim params``)."""
+        if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
+            return self.range_text()
+        lo = "-inf" if self.low is None else f"{to_display(self.name, self.low):.6g}"
+        hi = "inf" if self.high is None else f"{to_display(self.name, self.high):.6g}"
+        lb = "(" if (self.low is None or self.low_open) else "["
+        hb = ")" if (self.high is None or self.high_open) else "]"
+        return f"{lb}{lo}, {hi}{hb} {self.display}"
+
 
 _P = Param
 PARAMETERS: dict[str, Param] = {
@@ -87,6 +97,7 @@ PARAMETERS: dict[str, Param] = {
         # ---------------------------------------------------------------- wafer
         _P("wafer_diameter", "wafer", "2 R_w", "m", "in", 0.0762, "Wafer diameter", "Paper Table 1 (3 in)", 0.0),
         _P("dome_height", "wafer", "delta_d", "m", "um", 5e-6, "Dome height of the convex wafer (0 = flat)", "Paper Table 1", 0.0, None, False),
+        _P("edge_exclusion", "wafer", "EE", "m", "mm", 3e-3, "Metrology edge exclusion: the outer annulus left out of the within-wafer uniformity (also < wafer_diameter / 2)", "Wafer metrology convention: flatness and thickness are specified over a fixed quality area inside a nominal edge exclusion, 3 mm for 100-200 mm wafers (SEMI M1; SEMI MF1530), 2 mm and less for 300 mm (ITRS); see docs/model.md ('Within-wafer uniformity')", 0.0, None, False),
         # ---------------------------------------------------------------- process
         _P("applied_pressure", "process", "P", "Pa", "psi", 4 * 6894.757293168361, "Applied load over wafer area", "Paper Table 1 (4 psi; range 2-6 psi)", 0.0),
         _P("rotation_speed", "process", "Omega_p", "rad/s", "rpm", 2 * math.pi, "Pad (relative) rotation speed", "Paper Table 1 (60 rpm; range 30-90 rpm)", 0.0),
@@ -94,14 +105,14 @@ PARAMETERS: dict[str, Param] = {
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
-        _P("removal_law", "process", "-", "choice", "", "paper", "Removal law: the paper's RR = K sigma_n tau, or the shear-power law RR = k_s (mu p_c + chi tau_f) |du|", "docs/model.md ('Removal rate'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023)", choices=("paper", "shear_power")),
+        _P("removal_law", "process", "-", "choice", "", "shear_power", "Removal law: the paper's RR = K sigma_n tau, or the shear-power law RR = k_s (mu p_c + chi tau_f) |du|", "docs/model.md ('Removal rate'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023)", choices=("paper", "shear_power")),
         _P("shear_power_coefficient", "process", "k_s", "1/Pa", "1/Pa", 2.5e-13, "Scale k_s of the shear-power removal law", "Scale only: k_s mu = 1e-13 1/Pa, the order of oxide Preston constants (Preston's k_p P U gives ~100 nm/min at 4 psi and 0.63 m/s); see docs/model.md", 0.0),
         _P("fluid_shear_weight", "process", "chi", "", "", 0.0, "Share chi of the slurry's shear power that removes material in the shear-power law", "docs/model.md ('Removal rate'): removal needs abrasive contact pressure, which the slurry's bulk shear does not give", 0.0, 1.0, False, False),
         _P("removal_shear", "process", "-", "choice", "", "total", "Shear stress tau of the removal law: slurry plus pad-summit friction, or slurry only (Runnels & Eyman)", "docs/model.md ('Removal rate')", choices=("total", "slurry")),
         # ---------------------------------------------------------------- slurry
-        _P("slurry_model", "slurry", "-", "choice", "", "granular", "Slurry rheology: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (solved in p)", "docs/model.md ('Newtonian slurry and cavitation')", choices=("granular", "newtonian")),
+        _P("slurry_model", "slurry", "-", "choice", "", "newtonian", "Slurry rheology: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (solved in p)", "docs/model.md ('Newtonian slurry and cavitation')", choices=("granular", "newtonian")),
         _P("slurry_viscosity", "slurry", "eta", "Pa*s", "mPa*s", 5e-3, "Viscosity of the Newtonian slurry (slurry_model = 'newtonian')", "Thakurta et al., J. Electrochem. Soc. 148(4) G207 (2001), doi 10.1149/1.1355691: 0.005 Pa s; CMP slurries 1-30 mPa s (Lai, PhD MIT 2001: 0.03 Pa s); the range stops at 10 Pa s, far beyond any slurry", 0.0, 10.0, True, False),
-        _P("cavitation", "slurry", "-", "choice", "", "none", "Cavitation of the Newtonian slurry: none (full Sommerfeld), Gumbel (p -> max(p, p_cav)) or mass-conserving JFO; the granular slurry takes only 'none'", "docs/model.md ('Newtonian slurry and cavitation'); Elrod, J. Lubr. Technol. 103, 350 (1981); Giacopini et al., J. Tribol. 132, 041702 (2010)", choices=("none", "gumbel", "jfo")),
+        _P("cavitation", "slurry", "-", "choice", "", "gumbel", "Cavitation of the Newtonian slurry: none (full Sommerfeld), Gumbel (p -> max(p, p_cav)) or mass-conserving JFO; the granular slurry takes only 'none'", "docs/model.md ('Newtonian slurry and cavitation'); Elrod, J. Lubr. Technol. 103, 350 (1981); Giacopini et al., J. Tribol. 132, 041702 (2010)", choices=("none", "gumbel", "jfo")),
         _P("cavitation_pressure", "slurry", "p_cav", "Pa", "kPa", -98.2e3, "Gauge pressure at which the Newtonian slurry cavitates (used by cavitation = 'gumbel' or 'jfo')", "Vapour pressure of water at 25 C (3.17 kPa, CRC Handbook) minus one atmosphere; consistent with the sub-ambient film pressures of tens of kPa measured by Shan, Levert, Meade, Tichy & Danyluk, J. Tribol. 122 (2000); see docs/model.md", -101325.0, 0.0, False, False),
         # ---------------------------------------------------------------- slurry (Haff grain flow)
         _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter (also < pad_roughness / 10: particles must fit in the roughness layer that forms the film)", "Paper Table 1 (100 nm; 200 nm studied); CMP abrasives are 10 nm - 1 um (Lai 2001 used up to 1 um alumina), so the range stops at 2 um", 0.0, 2e-6, True, False),
@@ -111,20 +122,27 @@ PARAMETERS: dict[str, Param] = {
         _P("granular_density", "slurry", "rho", "kg/m^3", "kg/m^3", 134.0, "Bulk density of the abrasive grains (solid volume fraction x particle density)", "12.5 wt% silica (2200 kg/m^3) in water, typical oxide slurry (US 9,499,721 B2); see docs/model.md", 0.0),
         _P("diameter_gap_ratio", "slurry", "d/s", "", "", 67.0, "Particle diameter over mean gap between grains (Haff: s << d)", "Calibrated, not measured: sets the edge granular pressure to ~32 kPa at 60 rpm; see docs/model.md ('Ambient granular pressure')", 0.0),
         # ---------------------------------------------------------------- pad
-        _P("pad_roughness", "pad", "sigma", "m", "um", 15e-6, "Std of pad summit heights (R_q)", "Paper Table 1 (15 um; 10, 20 um studied)", 0.0),
+        _P("pad_roughness", "pad", "sigma", "m", "um", 5e-6, "Std of pad summit heights (R_q)", "Summit-height std of CMP pads: 5 um (Bozkaya & Mueftue, JES 156 H890, 2009), 5.24 um fitted to a pad compression test (Suzuki et al., CIRP Ann. 2017); conditioned IC1000 Ra about 5 um (Saka et al. 2008). Paper preset: 15 um (paper Table 1; 10, 20 um studied)", 0.0),
         _P("asperity_density", "pad", "eta_a", "1/m^2", "1/mm^2", 2.0e8, "Areal density of pad summits at the reference roughness", "Bozkaya & Mueftue, JES 156 H890 (2009); Shi & Ring, Microelectron. Eng. 87, 2368 (2010); Suzuki et al. (2017)", 0.0),
-        _P("asperity_radius", "pad", "R", "m", "um", 50e-6, "Summit radius of curvature at the reference roughness", "Bozkaya & Mueftue, JES 156 H890 (2009); Suzuki et al. (2017)", 0.0),
-        _P("pad_modulus", "pad", "E_1", "Pa", "MPa", 100e6, "Young's modulus of the pad", "Bozkaya & Mueftue, JES 156 H890 (2009)", 0.0),
+        _P("asperity_radius", "pad", "R", "m", "um", 7e-6, "Summit radius of curvature at the reference roughness", "Conditioned IC1000: 5-9 um (Jeong et al., Materials 17, 1817, 2024, doi 10.3390/ma17081817). Paper preset: 50 um (Bozkaya & Mueftue, JES 156 H890, 2009; Suzuki et al., CIRP Ann. 2017)", 0.0),
+        _P("pad_modulus", "pad", "E_1", "Pa", "MPa", 0.5e9, "Young's modulus of the pad asperities", "Wet IC1000: 0.53 GPa (Eusner, Saka, Chun et al., J. Electrochem. Soc. 156, H528, 2009); 0.5 GPa (Saka, Eusner & Chun, CIRP Ann. 57, 341, 2008). Paper preset: 100 MPa (Bozkaya & Mueftue, JES 156 H890, 2009)", 0.0),
         _P("pad_poisson", "pad", "nu_1", "", "", 0.3, "Poisson ratio of the pad", "Suzuki et al., CIRP Ann. (2017)", 0.0, 0.5, False, False),
-        _P("pad_hardness", "pad", "H", "Pa", "MPa", 9.4e6, "Hardness of the pad asperities", "H/E = 0.094 of wet IC1000 (Eusner et al., JES 156 H528, 2009) times pad_modulus; see docs/model.md", 0.0),
+        _P("pad_hardness", "pad", "H", "Pa", "MPa", 50e6, "Hardness of the pad asperities", "Wet IC1000: 0.05 GPa (Eusner et al., J. Electrochem. Soc. 156, H528, 2009; Saka et al., CIRP Ann. 57, 341, 2008); it bounds the mean real contact pressure (A_r >= P/H). Paper preset: 9.4 MPa (H/E = 0.094 of wet IC1000 times 100 MPa)", 0.0),
         _P("wafer_modulus", "pad", "E_2", "Pa", "GPa", 130e9, "Young's modulus of the wafer (silicon)", "Hopcroft, Nix & Kenny, JMEMS 19, 229 (2010)", 0.0),
         _P("wafer_poisson", "pad", "nu_2", "", "", 0.28, "Poisson ratio of the wafer (silicon)", "Hopcroft, Nix & Kenny (2010)", 0.0, 0.5, False, False),
         _P("contact_cutoff", "pad", "z_max/sigma", "", "", 3.0, "Summit heights truncated at this many sigma (paper: contact below 3 R_q)", "Paper section 2.2; Yu et al. [30]", 0.5, None, False),
         _P("roughness_scaling", "pad", "-", "choice", "", "self_similar", "How summit radius and density follow pad_roughness", "docs/model.md ('Changing the pad roughness')", choices=("self_similar", "fixed_summits")),
-        _P("reference_roughness", "pad", "sigma_ref", "m", "um", 15e-6, "Roughness at which asperity_density and asperity_radius are given", "Paper base case", 0.0),
+        _P("reference_roughness", "pad", "sigma_ref", "m", "um", 5e-6, "Roughness at which asperity_density and asperity_radius are given", "The roughness of the sources of asperity_density and asperity_radius (paper preset: 15 um, the paper's base case)", 0.0),
         _P("wafer_roughness", "pad", "sigma_2", "m", "um", 0.0, "Std of wafer surface heights", "Paper: wafer smooth (sigma_2 << sigma_1)", 0.0, None, False),
         _P("peklenik_number", "pad", "gamma", "", "", 1.0, "Peklenik number of the pad roughness (1 = isotropic)", "Paper section 3.1", 0.0),
         _P("roughness_angle", "pad", "theta_1", "rad", "deg", 0.0, "Orientation of the pad roughness from the sliding direction", "Paper (isotropic: irrelevant)"),
+        # pad stack under the asperity layer (pad compliance; docs/model.md, "Pad compliance")
+        _P("pad_compliance", "pad", "-", "choice", "", "winkler", "Bulk deformation of the pad: none (the paper), or a local elastic (Winkler) foundation of the pad and subpad layers in series", "docs/model.md ('Pad compliance'); 'rigid' is the paper's model", choices=("rigid", "winkler")),
+        _P("pad_thickness", "pad", "t_1", "m", "mm", 1.27e-3, "Thickness of the top pad (bulk under the asperities)", "IC1000: 50 mil = 1.27 mm (Pureon IC1000/IC1010 datasheet 2024, read in a transcription); see docs/model.md", 0.0),
+        _P("pad_bulk_modulus", "pad", "E_b", "Pa", "MPa", 300e6, "Young's modulus of the top pad's bulk (porous polyurethane)", "Wet IC1000: 0.3-0.5 GPa (Eusner et al., JES 156 H528, 2009; Saka et al., CIRP Ann. 57, 341, 2008), lower end; see docs/model.md", 0.0),
+        _P("subpad_thickness", "pad", "t_2", "m", "mm", 1.27e-3, "Thickness of the subpad (0 = no subpad)", "Suba IV sub-pad, 50 mil as commonly stacked under IC1000 (assumed: no datasheet found); see docs/model.md", 0.0, None, False),
+        _P("subpad_modulus", "pad", "E_2s", "Pa", "MPa", 2.3e6, "Young's modulus of the subpad", "Order of magnitude of a Suba IV-class felt: 2.29 MPa soft-pad layer of Wang et al., JES 144, 1121 (1997), as used by Lo & Lin, J. Mater. Process. Technol. 168, 250 (2005) (second-hand); see docs/model.md", 0.0),
+        _P("subpad_poisson", "pad", "nu_2s", "", "", 0.1, "Poisson ratio of the subpad", "Wang et al. (1997) via Lo & Lin (2005) (second-hand): 0.1 for the soft pad layer", 0.0, 0.5, False, True),
         _P("friction_coefficient", "pad", "mu", "", "", 0.4, "Coulomb friction of pad summits on the wafer", "Lai, PhD thesis MIT (2001): 0.40-0.49 in contact mode", 0.0, None, False),
         # ---------------------------------------------------------------- numerics
         _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
@@ -145,6 +163,15 @@ PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
     "paper": {
         "removal_law": "paper",
+        "slurry_model": "granular",
+        "cavitation": "none",
+        "pad_compliance": "rigid",
+        # SI floats, as the defaults of cmpsim 0.1.0 were: the preset is that model to the last bit
+        "pad_modulus": 100e6,
+        "pad_hardness": 9.4e6,
+        "asperity_radius": 50e-6,
+        "pad_roughness": 15e-6,
+        "reference_roughness": 15e-6,
     },
 }
 
@@ -170,6 +197,27 @@ MAX_PARTICLE_ROUGHNESS_RATIO = 0.1
 
 def _check_consistency(c: "Config") -> None:
     """Refuse combinations of inputs that make the model meaningless, naming the parameters."""
+    radius = 0.5 * c.wafer.wafer_diameter
+    if c.wafer.edge_exclusion >= radius:
+        raise ValueError(
+            f"edge_exclusion = {c.wafer.edge_exclusion:g} m leaves no wafer (wafer_diameter = {c.wafer.wafer_diameter:g} m): "
+            f"valid range [0, {radius:g}) m, i.e. below the wafer radius"
+        )
+    if c.pad.pad_compliance != "rigid" and c.numerics.model == "hydrodynamic":
+        raise ValueError(
+            f"pad_compliance = {c.pad.pad_compliance!r} needs a model with pad contact: model must be 'lep' or 'elastic' "
+            "(got 'hydrodynamic'); use pad_compliance = 'rigid' for the pure hydrodynamic variant"
+        )
+    if c.pad.pad_compliance != "rigid" and c.cavitation == "jfo":
+        raise ValueError(
+            "cavitation = 'jfo' is not available with pad_compliance = 'winkler' (the mass-conserving active set is not "
+            "coupled to the pad deflection): valid values 'none' or 'gumbel', or use pad_compliance = 'rigid'"
+        )
+    if c.pad.pad_compliance != "rigid" and c.pad.pad_poisson >= 0.5:
+        raise ValueError(
+            f"pad_poisson = {c.pad.pad_poisson:g} makes the compliant pad infinitely stiff (an incompressible bonded layer): "
+            "valid range [0, 0.5) with pad_compliance = 'winkler'"
+        )
     limit = MAX_PARTICLE_ROUGHNESS_RATIO * c.pad.pad_roughness
     if c.slurry.particle_diameter >= limit:
         raise ValueError(

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import brentq
 
+from . import compliance
 from .cavitation import CAVITATION_MODELS, CavitationSystem
 from .contact import PadSurface, asperity_contact, contact_table
 from .geometry import film_thickness
@@ -80,10 +81,13 @@ class PressureState:
     area_elastoplastic: np.ndarray
     area_plastic: np.ndarray
     residual: np.ndarray  # (R_F, R_y, R_x)
-    system: ReynoldsSystem | CavitationSystem
+    system: ReynoldsSystem | CavitationSystem | None  # None on a compliant pad (see ``coupling``)
     floored_fraction: float
     fill_fraction: np.ndarray | None = None  # JFO: theta (1 on the full film); else None
     cavitated: np.ndarray | None = None  # Gumbel / JFO: cells held at p_cav; else None
+    # ---- pad compliance (compliance.py); None on a rigid pad
+    deflection: np.ndarray | None = None  # pad deflection w at cell centres, m
+    coupling: object = None  # (CoupledLinearisation, evaluation) for the Jacobian
 
     @property
     def p_total(self) -> np.ndarray:
@@ -132,6 +136,8 @@ class WaferProblem:
         The granular slurry takes only "none" (its gauge pressure is bounded below by -p0).
     cavitation_pressure : float, optional
         p_cav, gauge, Pa, in [-101325, 0]; required unless ``cavitation == "none"``.
+    foundation : compliance.WinklerFoundation or None
+        Elastic pad stack under the asperity layer; ``None`` = rigid pad (the paper).
     solver : callable, optional
         Sparse solver of every pressure solve, passed to the Reynolds (or cavitation) system
         (``solver(A)`` returning an object with ``.solve(b)``); default a sparse LU.
@@ -149,6 +155,7 @@ class WaferProblem:
         separation_offset: float = 0.0,
         cavitation: str = "none",
         cavitation_pressure: float | None = None,
+        foundation: compliance.WinklerFoundation | None = None,
         solver=None,
     ):
         if variant not in MODEL_VARIANTS:
@@ -173,6 +180,11 @@ class WaferProblem:
         self.cavitation = cavitation
         self.p_cav = None if cavitation == "none" else float(cavitation_pressure)
         self._last_cavitated = None
+        self.foundation = foundation
+        if foundation is not None and variant == "hydrodynamic":
+            raise ValueError("a compliant pad (pad_compliance = 'winkler') needs a model with contact ('lep' or 'elastic')")
+        if foundation is not None and cavitation == "jfo":
+            raise ValueError("a compliant pad (pad_compliance = 'winkler') does not take JFO cavitation; use 'gumbel' or 'none'")
         self.sigma = lubrication.roughness.sigma
         R = grid.radius
         self.xc, self.yc = grid.centres
@@ -191,6 +203,8 @@ class WaferProblem:
     # ------------------------------------------------------------------ geometry
     def film(self, u, x, y) -> np.ndarray:
         """Film thickness at points (x, y) for position u = (h0, theta, beta), m."""
+        if self.foundation is not None:  # rigid film + pad deflection (compliance.py)
+            return compliance.deformed_film(self, u, x, y)
         return film_thickness(x, y, u[0], u[1], self.dome_height, self.grid.radius, cross_tilt=u[2])
 
     def face_coefficients(self, u) -> FaceCoefficients:
@@ -253,6 +267,8 @@ class WaferProblem:
 
     def state(self, u) -> PressureState:
         """Solve the Reynolds equation and evaluate contact and residuals at position u."""
+        if self.foundation is not None:  # film and pad deflection solved together (compliance.py)
+            return compliance.coupled_state(self, u)
         u = np.asarray(u, dtype=float)
         h = self.film(u, self.xc, self.yc)
         coeffs = self.face_coefficients(u)
@@ -284,6 +300,8 @@ class WaferProblem:
         the reduced system of the state; Gumbel: the cells where p > p_cav), exact wherever
         the set does not change under the perturbation.
         """
+        if self.foundation is not None:  # includes the pad deflection (compliance.py)
+            return compliance.coupled_jacobian(self, st, rel_step)
         J = np.empty((3, 3))
         base = st.system.residual(st.phi)
         acting = None if st.cavitated is None else ~st.cavitated
@@ -303,6 +321,8 @@ class WaferProblem:
     # ------------------------------------------------------------------ starts
     def contact_only_start(self) -> np.ndarray:
         """h0 at zero tilt for which the pad contact alone carries the applied load."""
+        if self.foundation is not None:  # with the pad deflection (compliance.py)
+            return compliance.compliant_contact_only_start(self)
         shape = self.film(np.zeros(3), self.xc, self.yc)  # h - h0 at u = 0
 
         def excess(h0):

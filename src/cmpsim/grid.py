@@ -135,6 +135,31 @@ class PolarGrid:
         c, s = np.cos(self.theta), np.sin(self.theta)
         return c * d_r - s * d_t, s * d_r + c * d_t
 
+    def interpolate(self, field, x, y, edge_value: float | None = None) -> np.ndarray:
+        """A cell field at points (x, y) (m) on the disk, bilinear in (r, theta).
+
+        The centre takes the mean of the first ring and the rim ``edge_value``, or, when it is
+        None, the linear extrapolation 1.5 f_last - 0.5 f_previous over the last half ring:
+        second order for a smooth field. Points beyond the rim are extrapolated likewise.
+        """
+        f = np.asarray(field, dtype=float)
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        n_r, n_t, dr, dth = self.n_r, self.n_theta, self.dr, self.dtheta
+        rim = 1.5 * f[-1] - 0.5 * f[-2] if edge_value is None else np.full(n_t, float(edge_value))
+        # radial nodes 0, r_0 .. r_{n-1}, R  ->  values centre, rings, rim
+        nodes = np.vstack([np.full(n_t, f[0].mean()), f, rim])
+        r_nodes = np.concatenate([[0.0], (np.arange(n_r) + 0.5) * dr, [self.radius]])
+        r = np.hypot(x, y)
+        s = np.mod(np.arctan2(y, x), 2.0 * np.pi) / dth - 0.5  # fractional sector index
+        j0 = np.floor(s).astype(int)
+        t = s - j0
+        k = np.clip(np.searchsorted(r_nodes, r, side="right") - 1, 0, n_r)
+        a = (r - r_nodes[k]) / (r_nodes[k + 1] - r_nodes[k])
+        ja, jb = np.mod(j0, n_t), np.mod(j0 + 1, n_t)
+        lower = (1.0 - t) * nodes[k, ja] + t * nodes[k, jb]
+        upper = (1.0 - t) * nodes[k + 1, ja] + t * nodes[k + 1, jb]
+        return (1.0 - a) * lower + a * upper
+
     def index(self, i, j) -> np.ndarray:
         """Linear unknown index of cell (i, j), with j taken modulo n_theta."""
         return np.asarray(i) * self.n_theta + np.mod(j, self.n_theta)

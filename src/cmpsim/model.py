@@ -15,14 +15,18 @@ from .setup import HAFF_T, PhysicalSetup, build_problem, effective_modulus, phys
 __all__ = ["build_problem", "solve", "PhysicalSetup", "physical_setup", "EquilibriumError", "REFERENCE_CASE", "reference_config", "HAFF_T", "effective_modulus"]
 
 #: The paper's normalisation point of the relative removal rate (Figs. 11-12) with its base
-#: load and speed (Table 1).
-REFERENCE_CASE = {"particle_diameter": 100e-9, "pad_roughness": 15e-6, "applied_pressure": "4 psi", "rotation_speed": "60 rpm"}
+#: load and speed (Table 1). The pad roughness of the reference case is the configuration's
+#: ``reference_roughness`` (15 um in the paper preset, as in the paper; the measured 5 um of
+#: the default pad otherwise), see :func:`reference_config`.
+REFERENCE_CASE = {"particle_diameter": 100e-9, "applied_pressure": "4 psi", "rotation_speed": "60 rpm"}
 _REFERENCE_CACHE: dict[tuple, float] = {}
 
 
 def reference_config(config: Config) -> Config:
-    """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE`, every other input equal."""
-    return config.replace(model="lep", **REFERENCE_CASE)
+    """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE` with the pad at its
+    ``reference_roughness``, every other input equal (the paper's d = 100 nm, sigma = 15 um, 4 psi,
+    60 rpm in the paper preset)."""
+    return config.replace(model="lep", pad_roughness=config.reference_roughness, **REFERENCE_CASE)
 
 
 def _reference_removal_rate(ref: Config) -> float:
@@ -31,7 +35,7 @@ def _reference_removal_rate(ref: Config) -> float:
     if key not in _REFERENCE_CACHE:
         if len(_REFERENCE_CACHE) > 256:
             _REFERENCE_CACHE.clear()
-        _REFERENCE_CACHE[key] = solve(ref, relative=False).removal_rate
+        _REFERENCE_CACHE[key] = solve(ref, relative=False).scalars["removal_rate_mean"]
     return _REFERENCE_CACHE[key]
 
 
@@ -88,17 +92,17 @@ def solve(
     if problem is None:
         problem = build_problem(config, setup)
     sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
-    scalars, polar = evaluate_outputs(config, setup, problem, sol)
+    scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
     if relative:
         if reference_removal_rate is None:
             ref = reference_config(config)
             same = ref.to_dict() == config.to_dict()  # the reference case itself: ratio 1
-            reference_removal_rate = scalars["removal_rate"] if same else _reference_removal_rate(ref)
-        scalars["removal_rate_relative"] = scalars["removal_rate"] / reference_removal_rate
+            reference_removal_rate = scalars["removal_rate_mean"] if same else _reference_removal_rate(ref)
+        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
     scan = None
     if check_roots:
         scan = scan_moment_roots(problem, sol)
         scalars["moment_roots_found"] = len(scan.roots)
-    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol)
+    result = Result(config=config, scalars=scalars, polar=polar, grid=setup.grid, problem=problem, solution=sol, profiles=profiles)
     result.root_scan = scan
     return result

@@ -1,14 +1,16 @@
 """Outputs of a solved equilibrium: stresses, removal rate, and every scalar and wafer map.
 
 Pure post-processing of an :class:`~cmpsim.equilibrium.EquilibriumSolution`: evaluates the
-shear stress and the removal law on the solved pressure and film, integrates the scalars
-over the wafer and returns the polar fields.
+shear stress and the removal law on the solved pressure and film, and reduces the fields to
+the scalars and radial profiles declared in :mod:`cmpsim.outputs` (wafer means, load
+shares, rotation averages, within-wafer uniformity).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from . import outputs, uniformity
 from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
 from .flowfactors import shear_stress_factors
@@ -17,14 +19,16 @@ from .removal import contact_shear_stress, newtonian_shear_stress, removal_rate,
 from .reynolds import NEWTONIAN_GRAIN_COEFFICIENT
 from .setup import PhysicalSetup
 
-__all__ = ["evaluate_outputs"]
+__all__ = ["evaluate_outputs", "reduce_outputs"]
 
 
 def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem, sol: EquilibriumSolution):
-    """Scalars (SI) and polar fields (cell centres) of a solved equilibrium."""
+    """Scalars (SI), polar fields (cell centres) and radial profiles of a solved equilibrium.
+
+    Every name is an entry of :data:`cmpsim.outputs.OUTPUTS`.
+    """
     st = sol.state
     g = problem.grid
-    area = np.pi * g.radius**2
     lub = setup.lubrication
     xc, yc = problem.xc, problem.yc
     # shear stress and removal rate
@@ -65,25 +69,33 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     # film thickness: centre, and minimum over the cell centres and the rim
     u = st.u
     h_rim = problem.film(u, *g.rim())
-    h_center = float(problem.film(u, 0.0, 0.0))
-    load = problem.load_scale
-    scalars = {
-        "film_thickness_center_m": h_center,
-        "film_thickness_min_m": float(min(st.h.min(), h_rim.min())),
-        "h0_m": float(u[0]),
-        "attack_angle_rad": float(u[1]),
-        "cross_tilt_rad": float(u[2]),
-        "fluid_load_fraction": g.integrate(st.p_fluid) / load,
-        "contact_load_fraction": g.integrate(st.p_contact) / load,
-        "contact_area_ratio_elastic": g.integrate(st.area_elastic) / area,
-        "contact_area_ratio_elastoplastic": g.integrate(st.area_elastoplastic) / area,
-        "contact_area_ratio_plastic": g.integrate(st.area_plastic) / area,
-        "mean_normal_stress_pa": g.integrate(sigma_n) / area,
-        "mean_shear_stress_pa": g.integrate(tau) / area,
-        "removal_rate": g.integrate(rr) / area,
+    polar = {
+        "film_thickness": st.h,
+        "slurry_pressure": st.p_fluid,
+        "granular_pressure": p_normal,
+        "contact_pressure": st.p_contact,
+        "total_pressure": st.p_total,
+        "contact_area_ratio_elastic": st.area_elastic,
+        "contact_area_ratio_elastoplastic": st.area_elastoplastic,
+        "contact_area_ratio_plastic": st.area_plastic,
+        "normal_stress": sigma_n,
+        "shear_stress": tau,
+        "removal_rate": rr,
+        # bulk deflection of the pad stack (0 on a rigid pad; compliance.py)
+        "pad_deflection": st.deflection if st.deflection is not None else np.zeros_like(st.h),
+    }
+    if st.fill_fraction is not None:
+        polar["fill_fraction"] = st.fill_fraction
+    # the outputs that are not a reduction of a field; the rest follow from the registry
+    explicit = {
+        "film_thickness_center": float(problem.film(u, 0.0, 0.0)),
+        "film_thickness_min": float(min(st.h.min(), h_rim.min())),
+        "h0": float(u[0]),
+        "attack_angle": float(u[1]),
+        "cross_tilt": float(u[2]),
         # the slurry pressure at the wafer edge: p0 (granular), ambient = 0 gauge (Newtonian)
-        "ambient_pressure_pa": 0.0 if newtonian else setup.ambient_pressure,
-        "sliding_speed_m_s": setup.kinematics.sliding_speed,
+        "ambient_pressure": 0.0 if newtonian else setup.ambient_pressure,
+        "sliding_speed": setup.kinematics.sliding_speed,
         "load_residual": float(st.residual[0]),
         "moment_residual": float(max(abs(st.residual[1]), abs(st.residual[2]))),
         "flow_factor_floored_fraction": float(st.floored_fraction),
@@ -91,20 +103,38 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "factorizations": int(sol.factorizations),
         "converged": bool(sol.converged),
     }
-    scalars["removal_rate_nm_per_min"] = scalars["removal_rate"] * 1e9 * 60.0
-    polar = {
-        "film_thickness": st.h,
-        "slurry_pressure": st.p_fluid,
-        "granular_pressure": p_normal,
-        "contact_pressure": st.p_contact,
-        "total_pressure": st.p_total,
-        "area_ratio_elastic": st.area_elastic,
-        "area_ratio_elastoplastic": st.area_elastoplastic,
-        "area_ratio_plastic": st.area_plastic,
-        "normal_stress": sigma_n,
-        "shear_stress": tau,
-        "removal_rate": rr,
-    }
-    if st.fill_fraction is not None:
-        polar["fill_fraction"] = st.fill_fraction
-    return scalars, polar
+    scalars, profiles = reduce_outputs(polar, g, problem.load_scale, config.edge_exclusion, explicit)
+    return scalars, polar, profiles
+
+
+def reduce_outputs(polar: dict, grid, load: float, edge_exclusion: float, explicit: dict):
+    """The scalars and profiles of the registry (:mod:`cmpsim.outputs`) from the polar fields.
+
+    ``explicit`` holds the scalars that are not reductions of a field (centre and minimum film,
+    equilibrium state, setup values, solver diagnostics). Returns ``(scalars, profiles)``,
+    scalars in registry order, profiles ``{"radius": r_i, NAME_profile: ring means}``.
+    """
+    area = np.pi * grid.radius**2
+    profiles = {"radius": grid.r[:, 0].copy()}
+    for name in outputs.profile_names():
+        profiles[name] = uniformity.ring_mean(polar[outputs.profile(name).of[0]])
+    computed = dict(explicit)
+    for name in outputs.scalar_names():
+        o = outputs.scalar(name)
+        if o.reduction == "wafer_mean":
+            computed[name] = grid.integrate(polar[o.of[0]]) / area
+        elif o.reduction == "load_share":
+            computed[name] = grid.integrate(polar[o.of[0]]) / load
+        elif o.reduction == "profile_std_over_mean":
+            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion)[0]
+        elif o.reduction == "profile_range":
+            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion)[1]
+    for name in outputs.scalar_names():
+        o = outputs.scalar(name)
+        if o.reduction == "sum":
+            total = 0.0
+            for part in o.of:
+                total = total + computed[part]
+            computed[name] = total
+    scalars = {name: computed[name] for name in outputs.scalar_names() if name in computed}
+    return scalars, profiles

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .compliance import PadLayer, WinklerFoundation
 from .config import Config
 from .contact import PadSurface
 from .equilibrium import WaferProblem
@@ -19,7 +20,7 @@ from .grid import PolarGrid
 from .kinematics import Kinematics
 from .reynolds import LubricationParameters
 
-__all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "HAFF_T"]
+__all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "pad_foundation", "HAFF_T"]
 
 #: Haff's pressure constant t; the paper gives only t/a = 1, so t = a = 1 (docs/model.md).
 HAFF_T = 1.0
@@ -35,11 +36,22 @@ class PhysicalSetup:
     lubrication: LubricationParameters
     ambient_pressure: float  # p0, Pa
     grid: PolarGrid
+    foundation: WinklerFoundation | None = None  # pad stack under the asperities; None = rigid
 
 
 def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
     """Effective modulus E' of eq. 22: 1/E' = (1 - nu1^2)/E1 + (1 - nu2^2)/E2, Pa."""
     return 1.0 / ((1.0 - nu1**2) / e1 + (1.0 - nu2**2) / e2)
+
+
+def pad_foundation(config: Config) -> WinklerFoundation | None:
+    """The elastic foundation of the pad stack (top pad + subpad in series), or None if rigid."""
+    if config.pad_compliance == "rigid":
+        return None
+    layers = [PadLayer(config.pad_thickness, config.pad_bulk_modulus, config.pad_poisson)]
+    if config.subpad_thickness > 0:
+        layers.append(PadLayer(config.subpad_thickness, config.subpad_modulus, config.subpad_poisson))
+    return WinklerFoundation.from_layers(layers)
 
 
 def physical_setup(config: Config) -> PhysicalSetup:
@@ -83,7 +95,7 @@ def physical_setup(config: Config) -> PhysicalSetup:
     p0 = float(granular_pressure(c.granular_density, c.diameter_gap_ratio, v, t=HAFF_T))
     n_r, n_t = c.grid_shape
     grid = PolarGrid(0.5 * c.wafer_diameter, n_r, n_t)
-    return PhysicalSetup(pad, rough, kin, lub, p0, grid)
+    return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_foundation(config))
 
 
 def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferProblem:
@@ -100,4 +112,5 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
         config.model,
         cavitation=config.cavitation,
         cavitation_pressure=config.cavitation_pressure,
+        foundation=s.foundation,
     )

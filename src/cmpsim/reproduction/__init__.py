@@ -59,7 +59,7 @@ def reproduce(out=None, grid: str | None = None, progress: bool = True, config: 
     progress : bool
         Show a rich progress bar.
     config : Config, optional
-        Inputs the figures do not vary (default :meth:`Config.default`).
+        Inputs the figures do not vary (default :meth:`Config.paper`, the paper's model).
     command : str, optional
         Command line recorded in the report.
 
@@ -72,7 +72,7 @@ def reproduce(out=None, grid: str | None = None, progress: bool = True, config: 
     t0 = time.perf_counter()
     out = Path(out if out is not None else "reproduction")
     out.mkdir(parents=True, exist_ok=True)
-    base = config or Config.default()
+    base = config or Config.paper()
     if grid is not None:
         base = base.replace(grid=grid)
     data, n_eq, n_fact, failures, solve_s = _solve_all(base, progress)

@@ -58,8 +58,8 @@ class FigureSpec:
     panels: tuple[tuple[str, str, float, bool], ...]  # (output key, axis label, factor, log scale)
 
 
-_H = ("film_thickness_center_m", "Film thickness at the wafer centre (μm)", 1e6, False)
-_TH = ("attack_angle_rad", "Attack angle (10⁻⁵ rad)", 1e5, False)
+_H = ("film_thickness_center", "Film thickness at the wafer centre (μm)", 1e6, False)
+_TH = ("attack_angle", "Attack angle (10⁻⁵ rad)", 1e5, False)
 _AE = ("contact_area_ratio_elastic", "Elastic contact area ratio (-)", 1.0, False)
 _AEP = ("contact_area_ratio_elastoplastic", "Elastoplastic contact area ratio (-)", 1.0, False)
 _RR = ("removal_rate_relative", "Relative removal rate (-)", 1.0, False)
@@ -99,11 +99,8 @@ class Point:
     def get(self, key: str) -> float:
         if self.scalars is None:
             return float("nan")
-        if key == "contact_area_ratio_total":
-            s = self.scalars
-            return s["contact_area_ratio_elastic"] + s["contact_area_ratio_elastoplastic"] + s["contact_area_ratio_plastic"]
         if key == "film_thickness_ratio":
-            return self.scalars["film_thickness_center_m"] / self.config.pad_roughness
+            return self.scalars["film_thickness_center"] / self.config.pad_roughness
         return float(self.scalars[key])
 
 

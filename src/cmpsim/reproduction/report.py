@@ -15,7 +15,7 @@ import numpy as np
 from .. import units
 from .._version import __version__
 from ..config import Config
-from ..studies import markdown_table
+from ..tables import markdown_table
 from .checks import SIMILAR, SLIGHT, StatementResult
 from .paper import CURVES, LOADS_PSI, SPEEDS_RPM, FigureSpec, RunData
 
@@ -105,14 +105,14 @@ def _csv_rows(spec: FigureSpec, data: RunData) -> list[dict[str, Any]]:
                 "rotation_speed_rpm": units.convert(cfg.rotation_speed, "rad/s", "rpm"),
             }
             for col, key, f in (
-                ("film_thickness_center_um", "film_thickness_center_m", 1e6),
+                ("film_thickness_center_um", "film_thickness_center", 1e6),
                 ("film_thickness_ratio", "film_thickness_ratio", 1.0),
-                ("attack_angle_rad", "attack_angle_rad", 1.0),
+                ("attack_angle_rad", "attack_angle", 1.0),
                 ("contact_area_ratio_elastic", "contact_area_ratio_elastic", 1.0),
                 ("contact_area_ratio_elastoplastic", "contact_area_ratio_elastoplastic", 1.0),
                 ("contact_area_ratio_plastic", "contact_area_ratio_plastic", 1.0),
                 ("fluid_load_fraction", "fluid_load_fraction", 1.0),
-                ("removal_rate_nm_per_min", "removal_rate_nm_per_min", 1.0),
+                ("removal_rate_nm_per_min", "removal_rate_mean", 1e9 * 60.0),
                 ("removal_rate_relative", "removal_rate_relative", 1.0),
                 ("flow_factor_floored_fraction", "flow_factor_floored_fraction", 1.0),
             ):
@@ -318,7 +318,7 @@ def _notes(data: RunData, failures: list[str]) -> list[str]:
             else f"LEP curves: flow factors regularised on at most {100 * max(lep_fl):.1f} % of the faces."
         )
     notes.append(
-        "Relative removal rate (Figs. 11-12): removal_rate / removal_rate of the LEP case d = 100 nm, σ = 15 μm, 4 psi, 60 rpm "
+        "Relative removal rate (Figs. 11-12): removal_rate_mean / removal_rate_mean of the LEP case d = 100 nm, σ = 15 μm, 4 psi, 60 rpm "
         "with every other input equal (cmpsim.model.REFERENCE_CASE), as in the paper."
     )
     notes.append(

@@ -11,6 +11,7 @@ from typing import Iterable
 import numpy as np
 
 from .._version import __version__
+from .. import outputs
 from ..config import PARAMETERS
 from .spec import SweepError, SweepSpec, _is_string_param
 
@@ -22,15 +23,19 @@ STATUS_MEANINGS = {
     "invalid": "bad parameters at this point (the error names the parameter and its range)",
     "not_requested": "grid cell that is neither in the outer product of the axes nor an explicit point",
 }
-_INT_SCALARS = ("iterations", "factorizations")
-_BOOL_SCALARS = ("converged",)
+
+
+def _dtype(name: str) -> str:
+    """Data type of a scalar of the registry (``float`` for a name it does not know)."""
+    return outputs.scalar(name).dtype if name in _SCALAR_NAMES else "float"
+
+
+_SCALAR_NAMES = frozenset(outputs.scalar_names())
 
 
 def _scalar_keys(records: Iterable[dict]) -> list[str]:
-    from ..result import SCALARS
-
-    keys = list(SCALARS)
-    extra = sorted({k for r in records for k in r.get("scalars", {}) if k not in SCALARS})
+    keys = outputs.scalar_names()
+    extra = sorted({k for r in records for k in r.get("scalars", {}) if k not in _SCALAR_NAMES})
     return keys + extra
 
 
@@ -47,7 +52,7 @@ def _coord_attrs(name: str) -> dict:
 def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: str, warm_start: bool, chain_length: int):
     import xarray as xr
 
-    from ..result import SCALARS
+    from ..result import REFERENCES
 
     shape = spec.shape
     dims = spec.dims
@@ -55,9 +60,9 @@ def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: 
     keys = _scalar_keys(recs)
     arrays: dict[str, np.ndarray] = {}
     for k in keys:
-        if k in _INT_SCALARS:
+        if _dtype(k) == "int":
             arrays[k] = np.full(shape, -1, dtype=np.int32)
-        elif k in _BOOL_SCALARS:
+        elif _dtype(k) == "bool":
             arrays[k] = np.zeros(shape, dtype=bool)
         else:
             arrays[k] = np.full(shape, np.nan, dtype=float)
@@ -79,14 +84,17 @@ def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: 
                 arrays[k][idx] = v
     data_vars = {}
     for k in keys:
-        attrs = {}
-        if k in SCALARS:
-            unit, _, _, desc = SCALARS[k]
-            attrs = {"units": unit, "long_name": desc}
-        if k in _INT_SCALARS:
+        # the attributes of the single-result NetCDF (cmpsim.outputs): units, long_name, CF flags
+        attrs = dict(outputs.scalar(k).cf_attrs) if k in _SCALAR_NAMES else {}
+        if _dtype(k) == "bool":
+            attrs["flag_values"] = np.array(attrs["flag_values"], dtype=np.int8)
+            attrs["comment"] = "0 where status is not 'ok'"
+        elif _dtype(k) == "int":
             attrs["comment"] = "-1 where status is not 'ok'"
+        elif k in _SCALAR_NAMES:
+            attrs["comment"] = "NaN where status is not 'ok'"
         data_vars[k] = (dims, arrays[k], attrs)
-    data_vars["status"] = (dims, status, {"long_name": "outcome of the point", "flag_meanings": "; ".join(f"{k}: {v}" for k, v in STATUS_MEANINGS.items())})
+    data_vars["status"] = (dims, status, {"long_name": "outcome of the point", "comment": "; ".join(f"{k}: {v}" for k, v in STATUS_MEANINGS.items())})
     data_vars["error"] = (dims, error, {"long_name": "error message ('' when ok)"})
     data_vars["start"] = (
         dims,
@@ -101,8 +109,13 @@ def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: 
     ds = xr.Dataset(data_vars, coords=coords)
     ds.attrs.update(
         {
+            "Conventions": "CF-1.11",
             "title": "cmpsim parameter sweep",
+            "source": f"cmpsim {__version__}, model {spec.base.model!r}",
+            "history": f"created by cmpsim {__version__} (cmpsim sweep; no time stamp, so that a resumed sweep gives the same file)",
+            "references": "\n".join(REFERENCES),
             "cmpsim_version": __version__,
+            "cmpsim_schema": outputs.SCHEMA_VERSION,
             "config_toml": spec.base.to_toml_text(),
             "sweep_toml": spec.source,
             "sweep_id": identity,

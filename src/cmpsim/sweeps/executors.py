@@ -58,7 +58,7 @@ def _run_point(task: dict, prev=None, prev2=None) -> dict:
     out = solve_point(cfg, start=start, relative=True, problem=problem)  # the problem built above, not again
     rec["start"] = out.start
     if out.ok:
-        rec["scalars"] = out.result.to_dict()
+        rec["scalars"] = dict(out.result.scalars)  # values and diagnostics, registry names (cmpsim.outputs)
         rec["u"] = [float(v) for v in out.result.solution.state.u]
     else:
         rec.update(status="failed", error=out.error)

@@ -143,7 +143,7 @@ def evaluate_dataset(ds: Dataset, values_si: Sequence[float], results: Sequence[
             compared = scale * raw
             loo_model = _rms(_loo(raw[ok], measured[ok], w[ok]))
             loo_mean = _rms(_loo(None, measured[ok], w[ok]))
-            pu = np.array([r.config.applied_pressure * r.scalars["sliding_speed_m_s"] if r is not None else np.nan for r in results])
+            pu = np.array([r.config.applied_pressure * r.scalars["sliding_speed"] if r is not None else np.nan for r in results])
             loo_preston = _rms(_loo(pu[ok], measured[ok], w[ok]))
     err = compared - measured
     rel = err / np.where(measured != 0, np.abs(measured), np.nan)

@@ -16,11 +16,13 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import units
+from .. import outputs, units
 from ..config import PARAMETERS, Config
 
 __all__ = [
     "QUANTITIES",
+    "QUANTITY_ALIASES",
+    "MEASURABLE_OUTPUTS",
     "COMPARISONS",
     "DataError",
     "DataPoint",
@@ -43,20 +45,10 @@ META_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "comparis
 EXTRA_CONDITIONS = {"sliding_speed": "m/s"}
 
 
-def _film_mean(result) -> float:
-    g = result.grid
-    return float(g.integrate(result.polar["film_thickness"]) / (np.pi * g.radius**2))
-
-
 def _film_max(result) -> float:
     g = result.grid
     rim = result.problem.film(result.solution.state.u, *g.rim())
     return float(max(result.polar["film_thickness"].max(), rim.max()))
-
-
-def _contact_total(result) -> float:
-    s = result.scalars
-    return s["contact_area_ratio_elastic"] + s["contact_area_ratio_elastoplastic"] + s["contact_area_ratio_plastic"]
 
 
 def _friction(result) -> float:
@@ -68,25 +60,50 @@ def _friction(result) -> float:
     """
     s = result.scalars
     p = result.config.applied_pressure
-    mu = s["mean_shear_stress_pa"] / p
+    mu = s["shear_stress_mean"] / p
     if getattr(result.config, "removal_shear", "total") != "total":
         mu += result.config.friction_coefficient * s["contact_load_fraction"]
     return float(mu)
 
 
-#: Measurable quantity -> (SI unit for pint, display unit for tables/plots, description, model extractor).
+#: The outputs of :mod:`cmpsim.outputs` that a data set may give (measurable results).
+MEASURABLE_OUTPUTS = (
+    "film_thickness_center",
+    "film_thickness_mean",
+    "film_thickness_min",
+    "attack_angle",
+    "fluid_load_fraction",
+    "contact_load_fraction",
+    "contact_area_ratio",
+    "contact_area_ratio_elastic",
+    "contact_area_ratio_elastoplastic",
+    "contact_area_ratio_plastic",
+    "normal_stress_mean",
+    "shear_stress_mean",
+    "removal_rate_mean",
+    "within_wafer_nonuniformity",
+    "removal_rate_range",
+)
+#: The 0.1 quantity names, still read: old name -> output name.
+QUANTITY_ALIASES = {"film_thickness": "film_thickness_center", "removal_rate": "removal_rate_mean"}
+
+
+def _from_registry(name: str) -> tuple[str, str, str, Callable[[Any], float]]:
+    o = outputs.scalar(name)
+    return (o.pint_unit, o.display_unit, o.long_name, lambda r: r.scalars[name])
+
+
+#: Measurable quantity -> (SI unit for pint, display unit for tables/plots, description, model
+#: extractor): the measurable outputs of the registry (:mod:`cmpsim.outputs`), their 0.1 names
+#: (``film_thickness`` = ``film_thickness_center``, ``removal_rate`` = ``removal_rate_mean``),
+#: and two quantities derived here (largest film, friction coefficient).
 QUANTITIES: dict[str, tuple[str, str, str, Callable[[Any], float]]] = {
-    "film_thickness": ("m", "um", "slurry film thickness at the wafer centre", lambda r: r.scalars["film_thickness_center_m"]),
-    "film_thickness_mean": ("m", "um", "slurry film thickness averaged over the wafer", _film_mean),
-    "film_thickness_min": ("m", "um", "smallest slurry film thickness over the wafer", lambda r: r.scalars["film_thickness_min_m"]),
-    "film_thickness_max": ("m", "um", "largest slurry film thickness over the wafer", _film_max),
-    "fluid_load_fraction": ("dimensionless", "%", "share of the applied load carried by the slurry", lambda r: r.scalars["fluid_load_fraction"]),
-    "contact_area_ratio": ("dimensionless", "%", "real contact area / wafer area (elastic + elastoplastic + plastic)", _contact_total),
-    "contact_area_ratio_elastic": ("dimensionless", "%", "elastic real contact area / wafer area", lambda r: r.scalars["contact_area_ratio_elastic"]),
-    "contact_area_ratio_elastoplastic": ("dimensionless", "%", "elastoplastic real contact area / wafer area", lambda r: r.scalars["contact_area_ratio_elastoplastic"]),
-    "friction_coefficient": ("dimensionless", "-", "wafer-mean shear stress (slurry + summit friction) / applied pressure", lambda r: _friction(r)),
-    "removal_rate": ("m/s", "nm/min", "wafer-mean removal rate K sigma_n tau", lambda r: r.scalars["removal_rate"]),
+    **{name: _from_registry(name) for name in MEASURABLE_OUTPUTS},
+    **{old: _from_registry(new) for old, new in QUANTITY_ALIASES.items()},
+    "film_thickness_max": ("m", "um", "largest film thickness over the wafer", _film_max),
+    "friction_coefficient": ("dimensionless", "-", "wafer-mean shear stress (slurry + summit friction) / applied pressure", _friction),
 }
+
 
 class DataError(ValueError):
     """A data file that cannot be read; the message names the file, line and problem."""

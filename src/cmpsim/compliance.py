@@ -1,0 +1,548 @@
+"""Pad compliance: the pad stack as an elastic (Winkler) foundation under the asperity layer.
+
+The rigid-pad model deforms only the asperity layer. Here the bulk of the pad (and an optional
+subpad) deflects under the normal pressure it carries, locally, as a bed of independent springs:
+
+    w = (p_fluid + p_contact) / k,          1/k = sum_i t_i / M_i,
+    M_i = E_i (1 - nu_i) / ((1 + nu_i)(1 - 2 nu_i))     (constrained, oedometric modulus)
+
+with w > 0 pushing the pad surface away from the wafer, so that the film and the contact
+separation become h = h_rigid(u) + w. ``docs/model.md`` ("Pad compliance") gives the reasons
+for the constrained modulus and for what a Winkler bed leaves out (the lateral coupling that
+concentrates pressure at the wafer edge).
+
+Coupled solve at a wafer position u = (h0, theta, beta). The unknowns are phi = ln(p/p0) and
+w at the cell centres; the film on a face takes the rigid film there plus w interpolated
+from the two cells beside it (extrapolated over the last half ring at the rim). Residuals
+
+    R(phi, w) = A(h(w)) phi - b(h(w))          (the Reynolds system of ``reynolds``)
+    G(phi, w) = k w - P(phi, h(w))             (local: P = (1 - a_r)(p - p0) + p_c)
+
+Newton's method on (phi, w) with w eliminated locally: G is diagonal in w, so
+dw = (P_phi dphi - G) / (k - P_h) and dphi solves the sparse Schur system
+
+    (A + R_w diag(P_phi / (k - P_h))) dphi = -R + R_w (G / (k - P_h)),
+
+whose pattern is the one of A (R_w = dR/dw couples nearest neighbours only). One sparse LU per
+Newton step, as for the rigid pressure solve. R_w is assembled from the derivative of each face
+flux with respect to the film on that face, obtained with four assemblies of the Reynolds
+operator on a colouring of the faces (radial faces of even / odd rings, angular faces of even /
+odd sectors: every cell then has exactly one face of each colour). The derivative of the
+equilibrium residuals with respect to u follows from the same factorisation (implicit
+differentiation, three back-substitutions), and so does a tangent predictor that starts the
+next solve close to its solution.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from .geometry import film_thickness
+from .reynolds import FaceCoefficients, assemble_operator, factorize, flux_divergence, lubrication_coefficients
+
+__all__ = [
+    "COMPLIANCE_MODELS",
+    "PadLayer",
+    "constrained_modulus",
+    "foundation_stiffness",
+    "WinklerFoundation",
+    "CoupledLinearisation",
+    "coupled_state",
+    "coupled_jacobian",
+    "compliant_contact_only_start",
+    "deformed_film",
+    "local_deflection",
+]
+
+#: Values of the ``pad_compliance`` input.
+COMPLIANCE_MODELS = ("rigid", "winkler")
+
+#: Newton on (phi, w) stops when the last step moved w by less than this many sigma and phi by
+#: less than this; the steps then contract by 0.05 or better, so the error left is far smaller.
+_STEP_TOL = 1e-8
+_MAX_INNER = 40
+#: No Newton step moves w by more than this many sigma.
+_MAX_DW = 0.25
+#: A factorisation is reused (chord step) while its steps contract by this factor or better; a
+#: factorisation from another position is tried only if its first step is below _REUSE_FIRST.
+_CONTRACTION = 0.05
+_REUSE_FIRST = 1e-4
+#: The Jacobian of the equilibrium uses the state's factorisation only if it was built at the
+#: same position and the iterate has moved less than this (sigma / phi units) since.
+_JACOBIAN_DRIFT = 1e-4
+
+
+# ---------------------------------------------------------------------------------- kernels
+def constrained_modulus(youngs_modulus, poisson):
+    """Constrained (oedometric, P-wave) modulus M = E (1 - nu) / ((1 + nu)(1 - 2 nu)), Pa.
+
+    The stress over the strain of a layer compressed without lateral expansion, which is the
+    state of a thin layer under a load much wider than its thickness.
+    """
+    e = np.asarray(youngs_modulus, dtype=float)
+    nu = np.asarray(poisson, dtype=float)
+    return e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+@dataclass(frozen=True)
+class PadLayer:
+    """One layer of the pad stack: thickness (m), Young's modulus (Pa), Poisson ratio."""
+
+    thickness: float
+    modulus: float
+    poisson: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.thickness) and self.thickness >= 0):
+            raise ValueError(f"layer thickness must be finite and >= 0 m; got {self.thickness!r}")
+        if not (np.isfinite(self.modulus) and self.modulus > 0):
+            raise ValueError(f"layer modulus must be finite and > 0 Pa; got {self.modulus!r}")
+        if not (0.0 <= self.poisson < 0.5):
+            raise ValueError(f"layer Poisson ratio must be in [0, 0.5); got {self.poisson!r}")
+
+    @property
+    def compliance(self) -> float:
+        """Deflection per unit pressure t / M of the layer, m/Pa."""
+        return self.thickness / float(constrained_modulus(self.modulus, self.poisson))
+
+
+def foundation_stiffness(layers) -> float:
+    """Stiffness k = 1 / sum(t_i / M_i) of layers in series, Pa/m (inf for no thickness)."""
+    c = sum(layer.compliance for layer in layers)
+    return np.inf if c == 0 else 1.0 / c
+
+
+@dataclass(frozen=True)
+class WinklerFoundation:
+    """Local elastic foundation of stiffness k (Pa/m): deflection w = p / k."""
+
+    stiffness: float
+
+    def __post_init__(self) -> None:
+        if not (self.stiffness > 0):
+            raise ValueError(f"foundation stiffness must be > 0 Pa/m; got {self.stiffness!r}")
+
+    @classmethod
+    def from_layers(cls, layers) -> "WinklerFoundation":
+        """The foundation of a stack of :class:`PadLayer` in series."""
+        return cls(foundation_stiffness(layers))
+
+    def deflection(self, pressure):
+        """Deflection (m) under a pressure (Pa)."""
+        return np.asarray(pressure, dtype=float) / self.stiffness
+
+
+# ---------------------------------------------------------------------------------- grid operators
+@dataclass(frozen=True)
+class _FaceOperators:
+    """Cell -> face interpolation and face -> cell divergence of the polar grid (sparse)."""
+
+    interp_radial: sp.csr_matrix  # radial faces x cells
+    interp_angular: sp.csr_matrix  # angular faces x cells
+    div_radial: sp.csr_matrix  # cells x radial faces: +1 for the cell inside, -1 outside
+    div_angular: sp.csr_matrix  # cells x angular faces: +1 clockwise cell, -1 counter-clockwise
+    ring_parity: np.ndarray  # (n_r, n_theta) ring index % 2
+    sector_parity: np.ndarray  # (n_r, n_theta) sector index % 2
+
+
+_OPERATORS: dict = {}
+
+
+def _face_operators(grid) -> _FaceOperators:
+    ops = _OPERATORS.get(grid)
+    if ops is not None:
+        return ops
+    n_r, n_t, n = grid.n_r, grid.n_theta, grid.size
+    i = np.repeat(np.arange(n_r), n_t)
+    j = np.tile(np.arange(n_t), n_r)
+    f = np.arange(n)
+    inner = i < n_r - 1
+    P = grid.index(i, j)
+    # radial face (i, j) is the outer face of cell (i, j)
+    out = grid.index(np.minimum(i + 1, n_r - 1), j)
+    prev = grid.index(np.maximum(i - 1, 0), j)
+    rows = np.concatenate([f, f])
+    cols = np.concatenate([P, np.where(inner, out, prev)])
+    vals = np.concatenate([np.where(inner, 0.5, 1.5), np.where(inner, 0.5, -0.5)])
+    interp_r = sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+    div_r = sp.csr_matrix(
+        (np.concatenate([np.ones(n), -np.ones(inner.sum())]), (np.concatenate([P, out[inner]]), np.concatenate([f, f[inner]]))),
+        shape=(n, n),
+    )
+    # angular face (i, j) is the counter-clockwise face of cell (i, j), shared with (i, j + 1)
+    ccw = grid.index(i, j + 1)
+    interp_a = sp.csr_matrix((np.full(2 * n, 0.5), (np.concatenate([f, f]), np.concatenate([P, ccw]))), shape=(n, n))
+    div_a = sp.csr_matrix((np.concatenate([np.ones(n), -np.ones(n)]), (np.concatenate([P, ccw]), np.concatenate([f, f]))), shape=(n, n))
+    ops = _FaceOperators(
+        interp_r, interp_a, div_r, div_a, (i % 2).reshape(n_r, n_t), (j % 2).reshape(n_r, n_t)
+    )
+    if len(_OPERATORS) > 16:
+        _OPERATORS.clear()
+    _OPERATORS[grid] = ops
+    return ops
+
+
+# ---------------------------------------------------------------------------------- memory
+@dataclass
+class _Memory:
+    """What a problem remembers between coupled solves (warm starts and deformed films)."""
+
+    last: tuple | None = None  # (u, phi, w) of the last converged state
+    tangent: tuple | None = None  # (u, phi, w, dphi/du, dw/du) of the last Jacobian
+    lin: "CoupledLinearisation | None" = None  # the last factorisation (reused for chord steps)
+    deflections: dict = field(default_factory=dict)  # u bytes -> w of converged states
+
+    def remember(self, u, phi, w) -> None:
+        self.last = (u.copy(), phi.copy(), w.copy())
+        if len(self.deflections) >= 1024:
+            self.deflections.pop(next(iter(self.deflections)))
+        self.deflections[np.asarray(u, dtype=float).tobytes()] = w.copy()
+
+
+def _memory(problem) -> _Memory:
+    mem = problem.__dict__.get("_compliance_memory")
+    if mem is None:
+        mem = problem.__dict__["_compliance_memory"] = _Memory()
+    return mem
+
+
+# ---------------------------------------------------------------------------------- evaluation
+def _rigid_film(problem, u, x, y):
+    return film_thickness(x, y, u[0], u[1], problem.dome_height, problem.grid.radius, cross_tilt=u[2])
+
+
+@dataclass
+class _Evaluation:
+    """Residuals and everything local at one (u, phi, w)."""
+
+    u: np.ndarray
+    phi: np.ndarray  # (n_r, n_theta)
+    w: np.ndarray  # (n_r, n_theta)
+    h: np.ndarray  # film at the cell centres
+    face_h: tuple  # (radial, angular) film on the faces
+    coeffs: FaceCoefficients
+    matrix: sp.csr_matrix
+    rhs: np.ndarray
+    R: np.ndarray  # Reynolds residual, flat
+    G: np.ndarray  # k w - P, flat
+    p_abs: np.ndarray  # p_slurry of PressureState (granular: absolute; Newtonian: gauge acting)
+    p_fluid: np.ndarray
+    contact: tuple  # (p_c, a_el, a_ep, a_pl)
+
+    @property
+    def p_total(self) -> np.ndarray:
+        return self.p_fluid + self.contact[0]
+
+
+def _face_coefficients(problem, u, w, ops) -> tuple:
+    wf = w.ravel()
+    hr = _rigid_film(problem, u, problem.xr, problem.yr) + (ops.interp_radial @ wf).reshape(w.shape)
+    ha = _rigid_film(problem, u, problem.xa, problem.ya) + (ops.interp_angular @ wf).reshape(w.shape)
+    return (hr, ha), _coefficients(problem, hr, ha)
+
+
+def _coefficients(problem, hr, ha) -> FaceCoefficients:
+    rad = lubrication_coefficients(hr, problem.xr, problem.yr, problem.lub)
+    ang = lubrication_coefficients(ha, problem.xa, problem.ya, problem.lub)
+    floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
+    return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
+
+
+def _slurry_pressure(problem, phi):
+    """(p_slurry, gauge pressure acting, its derivative in phi) of the unknown phi.
+
+    Granular: phi = ln(p/p0), p_slurry the absolute granular pressure. Newtonian: phi is the
+    gauge pressure p; with Gumbel cavitation the acting pressure is max(p, p_cav), whose
+    derivative is taken on the set where p > p_cav (semismooth Newton).
+    """
+    if not problem.newtonian:
+        p_abs = problem.p0 * np.exp(phi)
+        return p_abs, p_abs - problem.p0, p_abs
+    if problem.cavitation == "gumbel":
+        acting = phi > problem.p_cav
+        p = np.where(acting, phi, problem.p_cav)
+        return p, p, acting.astype(float)
+    return phi, phi, np.ones_like(phi)
+
+
+def _load(problem, phi, h):
+    """(p_slurry, p_fluid, contact) at a film h and phi: the pressure the pad carries is p_fluid + p_c."""
+    contact = problem.contact(h)
+    ar = contact[1] + contact[2] + contact[3]
+    p_slurry, gauge, _ = _slurry_pressure(problem, phi)
+    return p_slurry, (1.0 - ar) * gauge, contact
+
+
+def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
+    k = problem.foundation.stiffness
+    face_h, coeffs = _face_coefficients(problem, u, w, ops)
+    h = _rigid_film(problem, u, problem.xc, problem.yc) + w
+    A = assemble_operator(problem.grid, coeffs)
+    rhs = -flux_divergence(problem.grid, coeffs)
+    R = A @ phi.ravel() - rhs
+    p_abs, p_fluid, contact = _load(problem, phi, h)
+    G = (k * w - p_fluid - contact[0]).ravel()
+    return _Evaluation(u, phi, w, h, face_h, coeffs, A, rhs, R, G, p_abs, p_fluid, contact)
+
+
+def _load_derivative_h(problem, phi, h):
+    """dP/dh at fixed phi (central difference of the contact table), Pa/m."""
+    dh = 1e-6 * problem.sigma
+    plus = _load(problem, phi, h + dh)
+    minus = _load(problem, phi, h - dh)
+    return ((plus[1] + plus[2][0]) - (minus[1] + minus[2][0])) / (2.0 * dh)
+
+
+@dataclass
+class CoupledLinearisation:
+    """Newton matrix of the coupled (phi, w) system with w eliminated, factorised once.
+
+    ``factor`` solves S = A + R_w diag(P_phi / K); K = k - P_h. All vectors flat (cell order).
+    """
+
+    factor: object
+    R_w: sp.csr_matrix
+    P_phi: np.ndarray
+    P_h: np.ndarray
+    K: np.ndarray
+    u: np.ndarray  # position where it was built
+    drift: float = 0.0  # how far the iterate moved since (max |dw| / sigma, |dphi|), summed
+
+    def solve(self, R, G):
+        """(dphi, dw) of the linear system [A R_w; -P_phi K] (dphi, dw) = -(R, G)."""
+        dphi = np.asarray(self.factor.solve(-R + self.R_w @ (G / self.K)))
+        dw = (self.P_phi * dphi - G) / self.K
+        return dphi, dw
+
+
+def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
+    grid = problem.grid
+    k = problem.foundation.stiffness
+    phi = ev.phi.ravel()
+    # derivative of every face flux with respect to the film on that face
+    eps = 1e-7 * problem.sigma
+    hr, ha = ev.face_h
+    plus = _coefficients(problem, hr + eps, ha + eps)
+    d_rad = tuple((a - b) / eps for a, b in zip(plus.radial, ev.coeffs.radial))
+    d_ang = tuple((a - b) / eps for a, b in zip(plus.angular, ev.coeffs.angular))
+    zero = tuple(np.zeros_like(a) for a in d_rad)
+    s_rad = np.empty(grid.size)
+    s_ang = np.empty(grid.size)
+    for parity in (0, 1):
+        mask = ops.ring_parity == parity
+        dc = FaceCoefficients(tuple(a * mask for a in d_rad), zero)
+        r = assemble_operator(grid, dc) @ phi + flux_divergence(grid, dc)
+        s_rad[mask.ravel()] = r[mask.ravel()]
+        mask = ops.sector_parity == parity
+        dc = FaceCoefficients(zero, tuple(a * mask for a in d_ang))
+        r = assemble_operator(grid, dc) @ phi + flux_divergence(grid, dc)
+        s_ang[mask.ravel()] = r[mask.ravel()]
+    R_w = (ops.div_radial @ sp.diags(s_rad) @ ops.interp_radial + ops.div_angular @ sp.diags(s_ang) @ ops.interp_angular).tocsr()
+    ar = ev.contact[1] + ev.contact[2] + ev.contact[3]
+    P_phi = ((1.0 - ar) * _slurry_pressure(problem, ev.phi)[2]).ravel()
+    P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
+    K = k - P_h
+    S = (ev.matrix + R_w @ sp.diags(P_phi / K)).tocsr()
+    factor = factorize(S)
+    problem.factorizations += 1
+    return CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
+
+
+# ---------------------------------------------------------------------------------- local solve
+def local_deflection(problem, h_rigid, phi, w0=None, tol: float = 1e-12, max_iter: int = 60):
+    """Deflection w solving k w = P(phi, h_rigid + w) cell by cell (phi fixed), m.
+
+    The residual is increasing in w (the contact pressure falls as the film opens), so a
+    Newton iteration whose steps are limited to a quarter sigma and keep the film positive
+    converges from any start. Raises ValueError if it does not.
+    """
+    k = problem.foundation.stiffness
+    sigma = problem.sigma
+    h_rigid = np.asarray(h_rigid, dtype=float)
+    phi = np.broadcast_to(np.asarray(phi, dtype=float), h_rigid.shape)
+    floor = -h_rigid + 1e-3 * sigma  # smallest w with a positive film
+    w = np.maximum(np.zeros_like(h_rigid) if w0 is None else np.asarray(w0, dtype=float).copy(), floor)
+    for _ in range(max_iter):
+        h = h_rigid + w
+        _, p_fluid, contact = _load(problem, phi, h)
+        g = k * w - p_fluid - contact[0]
+        dg = k - _load_derivative_h(problem, phi, h)
+        step = -g / dg
+        step = np.clip(step, -_MAX_DW * sigma, _MAX_DW * sigma)
+        w_new = np.maximum(w + step, 0.5 * (w + floor))
+        done = np.max(np.abs(w_new - w)) < tol * sigma
+        w = w_new
+        if done:
+            return w
+    raise ValueError("the local pad deflection did not converge (film at the limit of the contact model)")
+
+
+# ---------------------------------------------------------------------------------- coupled state
+def _start(problem, u, mem: _Memory):
+    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally."""
+    if mem.tangent is not None:
+        ut, phi_t, w_t, dphi, dw = mem.tangent
+        du = u - ut
+        if np.all(np.abs(du) <= 50.0 * problem.u_scale):
+            return phi_t + dphi @ du, w_t + dw @ du
+    shape = (problem.grid.n_r, problem.grid.n_theta)
+    phi = mem.last[1] if mem.last is not None else np.zeros(shape)
+    w0 = mem.last[2] if mem.last is not None else None
+    h_rigid = _rigid_film(problem, u, problem.xc, problem.yc)
+    return phi, local_deflection(problem, h_rigid, phi, w0)
+
+
+def coupled_state(problem, u):
+    """The :class:`~cmpsim.equilibrium.PressureState` at u with the pad deflection solved in.
+
+    Raises ValueError (like the rigid state) when the film closes or the pressure diverges.
+    """
+    from .equilibrium import PressureState
+
+    u = np.asarray(u, dtype=float)
+    ops = _face_operators(problem.grid)
+    mem = _memory(problem)
+    sigma = problem.sigma
+    phi, w = _start(problem, u, mem)
+    ev = _evaluate(problem, u, phi, w, ops)
+    lin, prev = mem.lin, None
+    for _ in range(_MAX_INNER):
+        dphi = dw = None
+        if lin is not None:  # chord step with the factorisation at hand
+            dphi, dw = lin.solve(ev.R, ev.G)
+            size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+            if size > (_REUSE_FIRST if prev is None else _CONTRACTION * prev):
+                dphi = None
+        if dphi is None:  # Newton step: factorise at the current iterate
+            lin = _linearise(problem, ev, ops)
+            dphi, dw = lin.solve(ev.R, ev.G)
+            size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+        dphi = dphi.reshape(phi.shape)
+        dw = dw.reshape(w.shape)
+        # keep the film positive and the step inside a trust region
+        h = ev.h
+        scale = min(1.0, _MAX_DW * sigma / max(np.max(np.abs(dw)), 1e-300))
+        shrink = dw < -0.5 * h
+        if np.any(shrink):
+            scale = min(scale, float(np.min(-0.5 * h[shrink] / dw[shrink])))
+        phi = phi + scale * dphi
+        w = w + scale * dw
+        lin.drift += scale * size
+        if not np.all(np.isfinite(phi)) or (not problem.newtonian and phi.max() > 300.0):
+            raise ValueError(
+                f"the slurry pressure diverges (unknown up to {np.nanmax(phi):.3g}) on the compliant pad at a minimum "
+                f"film of {h.min() / sigma:.3g} sigma"
+            )
+        ev = _evaluate(problem, u, phi, w, ops)
+        if scale == 1.0 and size < _STEP_TOL:
+            break
+        prev = size if scale == 1.0 else None
+    else:
+        raise ValueError(f"the coupled film and pad deflection did not converge in {_MAX_INNER} Newton steps")
+    res = problem._residual(ev.p_total)
+    mem.remember(u, phi, w)
+    mem.lin = lin
+    pc, ae, aep, ap = ev.contact
+    floored = ev.coeffs.floored / max(ev.coeffs.n_faces, 1)
+    cavitated = (phi <= problem.p_cav) if problem.cavitation == "gumbel" else None
+    return PressureState(
+        u, ev.h, phi, ev.p_abs, ev.p_fluid, pc, ae, aep, ap, res, None, floored,
+        cavitated=cavitated, deflection=w, coupling=(lin, ev),
+    )
+
+
+def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
+    """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
+
+    For each component of u the Reynolds residual and the local balance are differentiated at
+    fixed (phi, w) (a finite difference of the face coefficients, as for the rigid pad) and
+    the coupled system is solved with the state's factorisation: three back-substitutions.
+    """
+    ops = _face_operators(problem.grid)
+    lin, ev = st.coupling
+    if lin is None or not np.array_equal(lin.u, st.u) or lin.drift > _JACOBIAN_DRIFT:
+        lin = _linearise(problem, ev, ops)  # the state converged on another position's factorisation
+        st.coupling = (lin, ev)
+        _memory(problem).lin = lin
+    R0 = ev.R
+    J = np.empty((3, 3))
+    dphi_du = np.empty((st.phi.size, 3))
+    dw_du = np.empty((st.phi.size, 3))
+    hc = _rigid_film(problem, st.u, problem.xc, problem.yc)
+    for k in range(3):
+        du = np.zeros(3)
+        du[k] = rel_step * problem.u_scale[k]
+        u = st.u + du
+        _, coeffs = _face_coefficients(problem, u, st.deflection, ops)
+        R = assemble_operator(problem.grid, coeffs) @ st.phi.ravel() + flux_divergence(problem.grid, coeffs)
+        dR = (R - R0) / du[k]
+        dh = ((_rigid_film(problem, u, problem.xc, problem.yc) - hc) / du[k]).ravel()
+        dG = -lin.P_h * dh
+        dphi, dw = lin.solve(dR, dG)
+        problem.back_substitutions += 1
+        dP = lin.P_phi * dphi + lin.P_h * (dh + dw)
+        J[:, k] = problem._residual(dP.reshape(st.phi.shape)) + np.array([1.0, 0.0, 0.0])
+        dphi_du[:, k], dw_du[:, k] = dphi, dw
+    shape = st.phi.shape
+    _memory(problem).tangent = (
+        st.u.copy(), st.phi.copy(), st.deflection.copy(),
+        dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
+    )
+    return J
+
+
+# ---------------------------------------------------------------------------------- start, film
+def compliant_contact_only_start(problem) -> np.ndarray:
+    """h0 at zero tilt for which the pad contact alone carries the load on the compliant pad."""
+    from scipy.optimize import brentq
+
+    from .equilibrium import EquilibriumError
+
+    pad, sigma = problem.pad, problem.sigma
+    shape = _rigid_film(problem, np.zeros(3), problem.xc, problem.yc)  # h - h0 at u = 0
+    zero_film = problem.contact(np.full(1, 1e-3 * sigma))[0][0]
+    if zero_film < problem.applied_pressure:
+        raise EquilibriumError(
+            "the applied load exceeds what the pad asperities can carry before the wafer "
+            f"touches the pad mean plane (contact pressure at zero film is {zero_film / problem.applied_pressure:.3g} "
+            "x the applied pressure); lower applied_pressure or stiffen the pad"
+        )
+    # contact only, the local balance k w = p_c(h) with h = h_rigid + w inverts explicitly:
+    # h_rigid = h - p_c(h) / k is increasing in h, so a table of it gives h from h_rigid
+    cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
+    h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
+    h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
+    hr_tab = h_tab - problem.contact(h_tab)[0] / problem.foundation.stiffness
+
+    def film(h0):
+        hr = h0 + shape
+        return np.where(hr >= h_max, hr, np.interp(hr, hr_tab, h_tab))
+
+    def excess(h0):
+        return problem.grid.integrate(problem.contact(film(h0))[0]) / problem.load_scale - 1.0
+
+    h_hi = -shape.min() + h_max  # no contact even undeflected
+    h_lo = -shape.max() + hr_tab[0]  # the film closes somewhere below this
+    if excess(h_lo) <= 0:
+        raise EquilibriumError("no film balances the contact load on the compliant pad")
+    h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * sigma, rtol=1e-12)
+    u = np.array([h0, 0.0, 0.0])
+    w = local_deflection(problem, h0 + shape, np.zeros_like(shape), film(h0) - (h0 + shape))
+    _memory(problem).last = (u, np.zeros_like(shape), w)
+    return u
+
+
+def deformed_film(problem, u, x, y) -> np.ndarray:
+    """Film thickness at points (x, y) of the wafer at position u on the compliant pad, m.
+
+    The rigid film plus the pad deflection of the coupled solution at u, interpolated from the
+    cell centres (solved first if u is not a position solved before).
+    """
+    u = np.asarray(u, dtype=float)
+    w = _memory(problem).deflections.get(u.tobytes())
+    if w is None:
+        w = problem.state(u).deflection
+    return _rigid_film(problem, u, x, y) + problem.grid.interpolate(w, x, y)

@@ -1,0 +1,605 @@
+"""The FastAPI application of ``cmpsim serve``: the JSON HTTP API and the page that uses it.
+
+Every route ends in the Python API: ``/api/solve`` in :meth:`cmpsim.config.Config.from_mapping`,
+:func:`cmpsim.solve` and :meth:`cmpsim.result.Result.to_json` (the object ``cmpsim run --json``
+prints); ``/api/sweeps`` in :func:`cmpsim.sweeps.sweep` (see :mod:`cmpsim.web.jobs`);
+``/api/validate`` in :func:`cmpsim.validation.validate`. Bad input gets HTTP 422 with cmpsim's
+own message and the parameter it names (``{"detail": ..., "parameter": ...}``); nothing the
+server does wrong shows a traceback to the client.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import hmac
+import json
+import logging
+import math
+import re
+import tempfile
+from contextlib import asynccontextmanager
+from http.cookies import SimpleCookie
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal
+from urllib.parse import parse_qs, quote, unquote
+
+from fastapi import Body, FastAPI, Query, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
+from starlette.concurrency import run_in_threadpool
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+from .. import __version__
+from .jobs import SweepJobs
+from .limits import BodySizeLimit, Busy, JobSlots, LimitError, Limits
+
+__all__ = ["create_app", "InputError", "TOKEN_COOKIE", "STATIC_FILES"]
+
+log = logging.getLogger("cmpsim.web")
+
+#: Cookie that carries the token after the page was opened with ``?token=...``.
+TOKEN_COOKIE = "cmpsim_token"
+_SECTIONS = ("wafer", "process", "slurry", "pad", "numerics")
+#: The only files the server sends besides the API: name -> media type.
+STATIC_FILES = {
+    "index.html": "text/html; charset=utf-8",
+    "app.js": "text/javascript; charset=utf-8",
+    "app.css": "text/css; charset=utf-8",
+    "api.html": "text/html; charset=utf-8",
+    "api.js": "text/javascript; charset=utf-8",
+    "plotly.min.js": "text/javascript; charset=utf-8",  # from the installed plotly wheel
+}
+_NO_SNIFF = {"X-Content-Type-Options": "nosniff"}
+
+_SOLVE_EXAMPLE = {"applied_pressure": "3 psi", "rotation_speed": "60 rpm", "grid": "coarse"}
+_SWEEP_EXAMPLE = {
+    "base": {"grid": "coarse"},
+    "axes": {"applied_pressure": {"start": "2 psi", "stop": "6 psi", "num": 5}},
+}
+
+
+class InputError(ValueError):
+    """Bad input: HTTP 422 with the message and the parameter it concerns (or None)."""
+
+    def __init__(self, message: str, parameter: str | None = None):
+        super().__init__(message)
+        self.parameter = parameter
+
+
+def _error(status: int, detail: str, parameter: str | None = None, headers: dict | None = None) -> JSONResponse:
+    return JSONResponse({"detail": detail, "parameter": parameter}, status_code=status, headers=headers)
+
+
+def _named(message: str, candidates) -> str | None:
+    """The candidate name that the message mentions first (cmpsim's messages name the parameter)."""
+    best = None
+    for name in set(candidates):
+        m = re.search(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])", message)
+        if m and (best is None or m.start() < best[0]):
+            best = (m.start(), name)
+    return best[1] if best else None
+
+
+def _keys(data: Any) -> list[str]:
+    """Every setting name in a flat or sectioned mapping of inputs."""
+    out: list[str] = []
+    if isinstance(data, dict):
+        for k, v in data.items():
+            if k in _SECTIONS and isinstance(v, dict):
+                out += [str(kk) for kk in v]
+            out.append(str(k))
+    return out
+
+
+def _check_scalars(data: dict, where: str = "") -> None:
+    from ..config import PARAMETERS
+
+    for key, value in data.items():
+        if key in _SECTIONS and isinstance(value, dict):
+            _check_scalars(value, where)
+            continue
+        if key not in PARAMETERS:
+            continue  # cmpsim says "unknown parameter" with the known names
+        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
+            kind = "null" if value is None else type(value).__name__.replace("dict", "object").replace("list", "array")
+            raise InputError(f'{where}{key}: expected a number (SI) or a string with units such as "3 psi"; got a JSON {kind}', key)
+
+
+def config_from_request(data: Any):
+    """The :class:`~cmpsim.config.Config` of a request body (flat or sectioned; units or SI numbers)."""
+    from ..config import Config
+
+    if data is None:
+        data = {}
+    if not isinstance(data, dict):
+        raise InputError('the request body must be a JSON object of inputs, e.g. {"applied_pressure": "3 psi"}')
+    _check_scalars(data)
+    try:
+        return Config.from_mapping(data)
+    except ValueError as exc:
+        raise InputError(str(exc), _named(str(exc), _keys(data))) from None
+
+
+def _json_number(v: float):
+    return v if math.isfinite(v) else None
+
+
+def _fields_payload(result, names: list[str] | None) -> dict:
+    """The wafer maps of :attr:`cmpsim.result.Result.fields` as JSON (NaN outside the wafer -> null)."""
+    import numpy as np
+
+    ds = result.fields
+    available = [k for k in ds.data_vars if ds[k].dims == ("y", "x")]
+    if names:
+        unknown = [n for n in names if n not in available]
+        if unknown:
+            raise InputError(f"fields: unknown field(s) {', '.join(unknown)}; available: {', '.join(available)}", "fields")
+    else:
+        names = available
+    maps = {}
+    for name in names:
+        z = np.asarray(ds[name].values, dtype=float)
+        rows = [[_json_number(float(f"{v:.6g}")) if math.isfinite(v) else None for v in row] for row in z.tolist()]
+        maps[name] = {"units": ds[name].attrs.get("units", ""), "long_name": ds[name].attrs.get("long_name", name), "z": rows}
+    return {
+        "x": [float(v) for v in ds["x"].values],
+        "y": [float(v) for v in ds["y"].values],
+        "units": {"x": ds["x"].attrs.get("units", "m"), "y": ds["y"].attrs.get("units", "m")},
+        "maps": maps,
+    }
+
+
+def _params_payload() -> dict:
+    from ..config import PARAMETERS, format_display, to_display
+
+    def shown(name, v):
+        if v is None:
+            return None
+        try:
+            return float(to_display(name, v))
+        except Exception:  # pragma: no cover - a unit pint cannot convert: show SI
+            return v
+
+    out = []
+    for n, p in PARAMETERS.items():
+        kind = "choice" if p.choices else ("grid" if p.unit == "grid" else "number")
+        out.append(
+            {
+                "name": n,
+                "section": p.section,
+                "symbol": p.symbol,
+                "kind": kind,
+                "unit": "" if kind != "number" else p.unit,
+                "display_unit": "" if kind != "number" else p.display,
+                "default": p.default,
+                "default_display": format_display(n, p.default),
+                "description": p.description,
+                "source": p.source,
+                "range": p.range_text(),
+                "low": p.low,
+                "high": p.high,
+                "low_open": p.low_open,
+                "high_open": p.high_open,
+                "low_display": shown(n, p.low) if kind == "number" else None,
+                "high_display": shown(n, p.high) if kind == "number" else None,
+                "choices": list(p.choices),
+            }
+        )
+    return {"cmpsim_version": __version__, "sections": list(_SECTIONS), "parameters": out}
+
+
+def _static_dir() -> Path:
+    return Path(str(resources.files("cmpsim.web") / "static"))
+
+
+def _plotly_js() -> Path | None:
+    try:
+        path = Path(str(resources.files("plotly") / "package_data" / "plotly.min.js"))
+    except ModuleNotFoundError:  # pragma: no cover - plotly is in the web extra
+        return None
+    return path if path.is_file() else None
+
+
+class TokenGuard:
+    """ASGI middleware: every request needs the token, as ``Authorization: Bearer TOKEN``, the
+    cookie :data:`TOKEN_COOKIE`, or ``?token=TOKEN`` (which also sets the cookie, so the page
+    opened from that link can call the API)."""
+
+    def __init__(self, app, token: str):
+        self.app = app
+        self.token = token.encode()
+
+    def _match(self, candidate: str | None) -> bool:
+        return candidate is not None and hmac.compare_digest(candidate.encode(), self.token)
+
+    async def __call__(self, scope, receive, send):
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
+        auth = headers.get("authorization", "")
+        bearer = auth[7:].strip() if auth[:7].lower() == "bearer " else None
+        cookie = None
+        if "cookie" in headers:
+            try:
+                jar = SimpleCookie(headers["cookie"])
+                if TOKEN_COOKIE in jar:
+                    cookie = unquote(jar[TOKEN_COOKIE].value)
+            except Exception:  # a malformed Cookie header is no token
+                cookie = None
+        query = parse_qs(scope.get("query_string", b"").decode("latin-1")).get("token", [None])[0]
+        if self._match(bearer) or self._match(cookie):
+            await self.app(scope, receive, send)
+            return
+        if self._match(query):
+            value = f"{TOKEN_COOKIE}={quote(self.token.decode(), safe='')}; Path=/; HttpOnly; SameSite=Strict"
+
+            async def send_with_cookie(message):
+                if message["type"] == "http.response.start":
+                    message = dict(message, headers=list(message.get("headers", [])) + [(b"set-cookie", value.encode("latin-1"))])
+                await send(message)
+
+            await self.app(scope, receive, send_with_cookie)
+            return
+        body = json.dumps(
+            {
+                "detail": "this server needs its token: send 'Authorization: Bearer TOKEN', or open the page once as /?token=TOKEN",
+                "parameter": None,
+            }
+        ).encode()
+        await send(
+            {
+                "type": "http.response.start",
+                "status": 401,
+                "headers": [(b"content-type", b"application/json"), (b"www-authenticate", b"Bearer"), (b"content-length", str(len(body)).encode())],
+            }
+        )
+        await send({"type": "http.response.body", "body": body})
+
+
+def create_app(limits: Limits | None = None, token: str | None = None, workers: int | None = None, scheduler: str | None = None) -> FastAPI:
+    """The application of ``cmpsim serve``.
+
+    Parameters
+    ----------
+    limits : Limits, optional
+        Largest grid, sweep, body, and the number of jobs running at once (default :class:`Limits`).
+    token : str, optional
+        If given, every route needs it (see :class:`TokenGuard`).
+    workers, scheduler
+        The Dask cluster of the sweeps: a local one with ``workers`` processes (default the
+        machine's cores), or the existing one at ``scheduler``.
+    """
+    limits = limits or Limits()
+    slots = JobSlots(limits.max_jobs)
+    jobs = SweepJobs(workers=workers, scheduler=scheduler, max_points=limits.max_sweep_points, on_finish=lambda job: slots.give_back())
+    static = _static_dir()
+
+    @asynccontextmanager
+    async def lifespan(app):
+        yield
+        await run_in_threadpool(jobs.close)
+
+    app = FastAPI(
+        title="cmpsim",
+        version=__version__,
+        summary="Wafer-scale CMP simulator: the HTTP API of `cmpsim serve`.",
+        description=(
+            "JSON in and out; inputs as strings with units (`\"3 psi\"`) or SI numbers, named as in "
+            "`cmpsim params`. Bad input: HTTP 422 `{\"detail\": message, \"parameter\": name}`."
+        ),
+        docs_url=None,  # FastAPI's Swagger page loads its JS from a CDN; /api/docs is served locally
+        redoc_url=None,
+        openapi_url="/api/openapi.json",
+        redirect_slashes=False,  # a path is served as written or not at all
+        lifespan=lifespan,
+    )
+    app.state.limits = limits
+    app.state.slots = slots
+    app.state.jobs = jobs
+    app.add_middleware(BodySizeLimit, max_bytes=limits.max_body_bytes)
+    if token:
+        app.add_middleware(TokenGuard, token=token)
+
+    # ------------------------------------------------------------------ errors
+    async def _unprocessable(request, exc: InputError | LimitError):
+        return _error(422, str(exc), exc.parameter)
+
+    app.add_exception_handler(InputError, _unprocessable)
+    app.add_exception_handler(LimitError, _unprocessable)
+
+    @app.exception_handler(Busy)
+    async def _busy(request, exc: Busy):
+        return _error(429, str(exc), None, headers={"Retry-After": str(limits.retry_after_s)})
+
+    @app.exception_handler(RequestValidationError)
+    async def _validation(request, exc: RequestValidationError):
+        errors = exc.errors()
+        first = errors[0] if errors else {}
+        loc = [str(x) for x in first.get("loc", ())]
+        kind = first.get("type", "")
+        if loc[:1] == ["body"]:
+            if kind == "json_invalid":
+                ctx = first.get("ctx", {}).get("error", "")
+                return _error(422, f"the request body is not valid JSON{': ' + str(ctx) if ctx else ''}")
+            return _error(422, 'the request body must be a JSON object, e.g. {"applied_pressure": "3 psi"}' + ("" if len(loc) == 1 else f" ({'.'.join(loc[1:])}: {first.get('msg', '')})"))
+        name = loc[-1] if loc else None
+        return _error(422, f"{name}: {first.get('msg', 'invalid value')}" if name else "invalid request", name)
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request, exc: StarletteHTTPException):
+        return _error(exc.status_code, str(exc.detail), None, headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(Exception)
+    async def _internal(request, exc: Exception):
+        # the traceback goes to the server's log (uvicorn logs the re-raised exception), never to the client
+        log.error("internal error on %s %s: %s", request.method, request.url.path, type(exc).__name__)
+        return _error(500, "internal server error; it was logged on the server (please report what you sent)")
+
+    # ------------------------------------------------------------------ page
+    def _file(name: str):
+        if name not in STATIC_FILES:
+            return _error(404, "Not Found")
+        path = _plotly_js() if name == "plotly.min.js" else static / name
+        if path is None or not path.is_file():
+            return _error(404, "Not Found")
+        cache = "public, max-age=86400" if name == "plotly.min.js" else "no-cache"
+        return FileResponse(path, media_type=STATIC_FILES[name], headers={**_NO_SNIFF, "Cache-Control": cache})
+
+    @app.get("/", include_in_schema=False)
+    def index():
+        return _file("index.html")
+
+    @app.get("/api/docs", include_in_schema=False)
+    def api_docs():
+        return _file("api.html")
+
+    @app.get("/static/{name}", include_in_schema=False)
+    def static_file(name: str):
+        return _file(name)
+
+    # ------------------------------------------------------------------ API: inputs
+    @app.get("/api/info", summary="Version, limits and jobs running")
+    def info():
+        return {
+            "cmpsim_version": __version__,
+            "limits": limits.as_dict(),
+            "jobs_running": slots.used,
+            "token_required": bool(token),
+            "sweep_cluster": f"Dask scheduler at {scheduler}" if scheduler else ("local Dask cluster, one worker per core" if workers is None else f"local Dask cluster, {workers} worker(s)"),
+        }
+
+    @app.get("/api/params", summary="Every input: name, section, default, display unit, valid range, source, choices")
+    def params():
+        return _params_payload()
+
+    # ------------------------------------------------------------------ API: one operating point
+    @app.post(
+        "/api/solve",
+        summary="Solve one operating point",
+        description=(
+            "The body is a JSON object of inputs (flat, or in the sections of a config file); missing inputs "
+            "take their defaults. The answer is exactly the object `cmpsim run --json` prints for the same "
+            "inputs; `?format=netcdf` answers the NetCDF file of `Result.to_netcdf`; `?include=fields` adds "
+            "`fields` (the wafer maps on x, y; `&fields=a,b` chooses them) to that object. 422: bad input "
+            "(names the parameter) or no equilibrium (the diagnosis). 429: every job slot taken."
+        ),
+        responses={200: {"content": {"application/json": {}, "application/x-netcdf": {}}}},
+    )
+    def solve_route(
+        payload: dict[str, Any] | None = Body(None, openapi_examples={"3 psi": {"value": _SOLVE_EXAMPLE}}),
+        format: Literal["json", "netcdf"] = Query("json", description="json (default) or netcdf"),
+        include: Literal["fields"] | None = Query(None, description="fields: add the wafer maps"),
+        fields: str | None = Query(None, description="comma-separated field names for include=fields (default all)"),
+    ):
+        from ..equilibrium import EquilibriumError
+        from ..model import solve
+
+        cfg = config_from_request(payload)
+        limits.check_grid(cfg.numerics.grid)
+        names = [f.strip() for f in fields.split(",") if f.strip()] if fields else None
+        with slots:
+            try:
+                result = solve(cfg)
+            except EquilibriumError as exc:
+                raise InputError(f"no equilibrium: {exc}") from None
+            except ValueError as exc:
+                raise InputError(str(exc), _named(str(exc), _keys(payload))) from None
+            if format == "netcdf":
+                with tempfile.TemporaryDirectory(prefix="cmpsim-serve-") as tmp:
+                    data = result.to_netcdf(Path(tmp) / "result.nc").read_bytes()
+                return Response(data, media_type="application/x-netcdf", headers={"Content-Disposition": 'attachment; filename="cmpsim-result.nc"'})
+            text = result.to_json()  # the object `cmpsim run --json` prints
+            if include != "fields":
+                return Response(text, media_type="application/json")
+            obj = json.loads(text)
+            obj["fields"] = _fields_payload(result, names)
+            return JSONResponse(obj)
+
+    # ------------------------------------------------------------------ API: sweeps
+    def _check_sweep_size(payload: dict) -> None:
+        axes = payload.get("axes")
+        if not isinstance(axes, dict):
+            return
+        for name, spec in axes.items():
+            n = len(spec) if isinstance(spec, list) else (spec.get("num") if isinstance(spec, dict) else None)
+            if isinstance(n, int) and not isinstance(n, bool) and n > limits.max_sweep_points:
+                raise LimitError(
+                    f"sweep [axes] {name}: {n} values, more than this server's largest sweep of "
+                    f"{limits.max_sweep_points} points (--max-sweep-points)",
+                    parameter=str(name),
+                )
+
+    @app.post(
+        "/api/sweeps",
+        status_code=202,
+        summary="Start a sweep in the background",
+        description=(
+            "The body is the content of a sweep file as JSON: `base` (inputs), `axes` (name: list of values or "
+            "{start, stop, num[, scale]}), `points` (explicit points). Answers at once with the sweep's `id` "
+            "and layout; the sweep runs on the server's Dask cluster, as `cmpsim sweep` does."
+        ),
+    )
+    def start_sweep(payload: dict[str, Any] = Body(..., openapi_examples={"pressure": {"value": _SWEEP_EXAMPLE}})):
+        from ..sweeps import SweepSpec
+
+        axes, points = payload.get("axes"), payload.get("points")
+        names = [str(n) for n in axes] if isinstance(axes, dict) else []
+        names += _keys(payload.get("base"))
+        for p in points if isinstance(points, list) else []:
+            names += _keys(p)
+        _check_sweep_size(payload)
+        if isinstance(payload.get("base"), dict):
+            _check_scalars(payload["base"], "sweep [base] ")
+        try:
+            spec = SweepSpec.from_mapping(payload, where="sweep")
+            spec.check_size(limits.max_sweep_points)
+        except LimitError:
+            raise
+        except ValueError as exc:
+            raise InputError(str(exc), _named(str(exc), names)) from None
+        for grid in {spec.base.numerics.grid, *spec.coords.get("grid", ())}:
+            try:
+                limits.check_grid(grid)
+            except LimitError:
+                raise
+            except ValueError:
+                pass  # a malformed grid value: that point will be recorded as invalid
+        slots.take()
+        try:
+            job = jobs.start(spec)
+        except BaseException:
+            slots.give_back()
+            raise
+        return {"id": job.id, "status": job.status, "total": job.total, "warnings": spec.invalid_values(), **job.layout()}
+
+    def _job(job_id: str):
+        job = jobs.get(job_id)
+        if job is None:
+            raise StarletteHTTPException(404, f"no sweep with id {job_id!r} on this server")
+        return job
+
+    @app.get("/api/sweeps", summary="The sweeps this server knows (without their points)")
+    def list_sweeps():
+        return [j.state(with_points=False) for j in list(jobs.jobs.values())]
+
+    @app.get("/api/sweeps/{job_id}", summary="Status, done/total and the finished points of a sweep")
+    def sweep_state(job_id: str):
+        return _job(job_id).state()
+
+    @app.get(
+        "/api/sweeps/{job_id}/events",
+        summary="Server-sent events: one `point` event per finished point, then `end`",
+        response_class=StreamingResponse,
+    )
+    async def sweep_events(job_id: str, request: Request):
+        job = _job(job_id)
+        try:
+            sent = max(0, int(request.headers.get("last-event-id", "0")))
+        except ValueError:
+            sent = 0
+
+        async def stream():
+            nonlocal sent
+            yield "retry: 1000\n\n"
+            while True:
+                finished = job.finished_running
+                while sent < job.done:
+                    point = job.points[sent]
+                    sent += 1
+                    data = json.dumps({**point, "done": sent, "total": job.total}, allow_nan=False)
+                    yield f"id: {sent}\nevent: point\ndata: {data}\n\n"
+                if finished:
+                    yield f"event: end\ndata: {json.dumps(job.state(with_points=False), allow_nan=False)}\n\n"
+                    return
+                if await request.is_disconnected():
+                    return
+                await asyncio.sleep(0.1)
+
+        return StreamingResponse(stream(), media_type="text/event-stream", headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
+
+    @app.get("/api/sweeps/{job_id}/result", summary="The sweep's NetCDF file (once done)", response_class=FileResponse)
+    def sweep_result(job_id: str):
+        job = _job(job_id)
+        if job.status != "done" or not job.out.is_file():
+            raise StarletteHTTPException(409, f"the sweep is {job.status} ({job.done} of {job.total} points); its file is there once it is done")
+        return FileResponse(job.out, media_type="application/x-netcdf", filename=f"cmpsim-sweep-{job.id}.nc")
+
+    @app.get("/api/sweeps/{job_id}/file", summary="The sweep file (TOML) of a sweep, for `cmpsim sweep`")
+    def sweep_file(job_id: str):
+        job = _job(job_id)
+        return Response(job.spec.to_toml(), media_type="application/toml", headers={"Content-Disposition": f'attachment; filename="cmpsim-sweep-{job.id}.toml"'})
+
+    @app.delete("/api/sweeps/{job_id}", summary="Cancel a running sweep; forget a finished one")
+    def delete_sweep(job_id: str):
+        job = _job(job_id)
+        if job.finished_running:
+            jobs.remove(job_id)
+            return {"id": job_id, "status": "deleted"}
+        jobs.cancel(job_id)
+        return {"id": job_id, "status": "cancelling"}
+
+    # ------------------------------------------------------------------ API: validation
+    @app.post(
+        "/api/validate",
+        summary="Model vs measurements from a CSV in the format of `cmpsim validate`",
+        description=(
+            "The body is the CSV text (`Content-Type: text/csv`), or JSON `{\"csv\": text, \"base\": {inputs}}`. "
+            "Answers the tables `cmpsim validate` prints (per point, per data set), plus each point's numbers."
+        ),
+        openapi_extra={"requestBody": {"content": {"text/csv": {"schema": {"type": "string"}}, "application/json": {"schema": {"type": "object"}}}}},
+    )
+    async def validate_route(request: Request, grid: str | None = Query(None, description="grid preset or NRxNT for every solve")):
+        raw = await request.body()
+        base: Any = {}
+        ctype = request.headers.get("content-type", "").split(";")[0].strip().lower()
+        if ctype == "application/json":
+            try:
+                obj = json.loads(raw)
+            except ValueError as exc:
+                raise InputError(f"the request body is not valid JSON: {exc}") from None
+            if not isinstance(obj, dict) or not isinstance(obj.get("csv"), str):
+                raise InputError('the JSON body must be {"csv": "<the CSV text>", "base": {inputs}}', "csv")
+            text, base = obj["csv"], obj.get("base") or {}
+        else:
+            try:
+                text = raw.decode("utf-8")
+            except UnicodeDecodeError:
+                raise InputError("the CSV must be UTF-8 text") from None
+        if grid is not None:
+            if not isinstance(base, dict):
+                raise InputError('"base" must be an object of inputs', "base")
+            base = dict(base, grid=grid)
+        return await run_in_threadpool(_validate, text, base)
+
+    def _validate(text: str, base: Any) -> dict:
+        from ..validation import load_datasets, validate
+
+        cfg = config_from_request(base)
+        limits.check_grid(cfg.numerics.grid)
+        with tempfile.TemporaryDirectory(prefix="cmpsim-serve-") as tmp:
+            path = Path(tmp) / "upload.csv"
+            path.write_text(text, encoding="utf-8")
+            try:
+                datasets = load_datasets(path)
+            except ValueError as exc:
+                raise InputError(str(exc).replace(str(path), "upload.csv")) from None
+        n = sum(len(d.points) for d in datasets)
+        if n > limits.max_sweep_points:
+            raise LimitError(f"the CSV has {n} data points, more than this server solves in one request ({limits.max_sweep_points}; --max-sweep-points)")
+        with slots:
+            report = validate(datasets, config=cfg)
+
+        def clean(v):
+            return _json_number(v) if isinstance(v, float) else v
+
+        return {
+            "points": {"header": list(report.POINT_HEADER), "rows": report.point_rows()},
+            "datasets": {"header": list(report.DATASET_HEADER), "rows": report.dataset_rows()},
+            "records": [{k: clean(v) for k, v in p.as_row().items()} for p in report.points],
+            "equilibria": report.equilibria,
+            "elapsed_s": report.elapsed_s,
+        }
+
+    return app

@@ -1,0 +1,199 @@
+"""The page of `cmpsim serve` in a real Chromium: it loads, solves, shows errors and sweeps.
+
+The browser is the system Chromium driven by Playwright (never a downloaded browser: see
+docs/make_screenshots.py for the flags). Every request the page makes is routed through a
+guard that fails the test if it leaves 127.0.0.1, and any JavaScript error fails it too.
+In CI (the CI environment variable set) a missing Playwright or Chromium is a failure; on a
+developer's machine these tests are skipped with the reason.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+from pathlib import Path
+from urllib.parse import urlsplit
+
+import pytest
+
+import cmpsim
+from cmpsim.config import Config
+
+pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("ignore::DeprecationWarning")]
+
+ROOT = Path(__file__).resolve().parents[1]
+IN_CI = bool(os.environ.get("CI"))
+
+
+def _require(ok: bool, reason: str) -> None:
+    if ok:
+        return
+    if IN_CI:
+        pytest.fail(f"{reason}; CI must run the browser tests (.ci/run installs Debian's chromium and the playwright package)")
+    pytest.skip(reason)
+
+
+def _shots_module():
+    spec = importlib.util.spec_from_file_location("make_screenshots", ROOT / "docs" / "make_screenshots.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+SHOTS = _shots_module()
+
+
+@pytest.fixture(scope="module")
+def server():
+    try:
+        from cmpsim.web.app import create_app
+        from cmpsim.web.server import start_in_background
+    except ImportError as exc:
+        _require(False, f'the web extra is not installed ({exc.name}): pip install "cmpsim[web]"')
+    with start_in_background(create_app(workers=1)) as srv:
+        yield srv
+
+
+@pytest.fixture(scope="module")
+def browser():
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        _require(False, "the playwright package is not installed (pip install playwright; no `playwright install`)")
+    executable = SHOTS.find_chromium()
+    _require(executable is not None, "no system Chromium (Debian: apt-get install chromium; or set CMPSIM_CHROMIUM)")
+    with sync_playwright() as pw:
+        b = SHOTS.launch(pw, executable)
+        yield b
+        b.close()
+
+
+@pytest.fixture
+def page(browser, server):
+    """A fresh page whose every request must go to 127.0.0.1, and which must raise no JS error."""
+    context = browser.new_context(viewport=SHOTS.VIEWPORT, accept_downloads=True)
+    outside, js_errors = [], []
+
+    def guard(route):
+        url = route.request.url
+        scheme, host = urlsplit(url).scheme, urlsplit(url).hostname
+        if scheme in ("data", "blob") or host == "127.0.0.1":
+            route.continue_()
+        else:
+            outside.append(url)
+            route.abort()
+
+    context.route("**/*", guard)
+    p = context.new_page()
+    p.on("pageerror", lambda exc: js_errors.append(str(exc)))
+    p.set_default_timeout(60_000)
+    yield p
+    context.close()
+    assert not outside, f"the page made requests that leave 127.0.0.1: {outside}"
+    assert not js_errors, f"JavaScript errors on the page: {js_errors}"
+
+
+def _open(page, server):
+    SHOTS.wait_ready(page, server.url)
+    page.fill('#inputs [name="grid"]', "coarse")
+
+
+def test_the_page_loads_with_every_input_of_api_params(page, server):
+    SHOTS.wait_ready(page, server.url)
+    params = page.evaluate("fetch('/api/params').then(r => r.json())")["parameters"]
+    shown = page.evaluate(
+        """() => Object.fromEntries([...document.querySelectorAll('#inputs [name]')].map(el => [el.name, {
+            value: el.value,
+            section: el.closest('fieldset').dataset.section,
+            unit: el.parentElement.querySelector('.unit').textContent}]))"""
+    )
+    assert list(shown) == [p["name"] for p in params]
+    for p in params:
+        assert shown[p["name"]] == {"value": p["default_display"], "section": p["section"], "unit": p["display_unit"]}, p["name"]
+
+
+def test_a_value_with_a_unit_solves_and_the_results_table_and_the_map_appear(page, server):
+    _open(page, server)
+    page.fill('#inputs [name="applied_pressure"]', "3 psi")
+    page.click("#solve")
+    cell = page.wait_for_selector('#results td[data-key="film_thickness_center"]')
+    page.wait_for_selector("#map-removal_rate .main-svg")
+    data = json.loads(cmpsim.solve(applied_pressure="3 psi", grid="coarse").to_json())
+    expected = {**data["values"], **data["solver"]}  # schema 2: the table shows values and solver diagnostics
+    assert float(cell.get_attribute("title")) == expected["film_thickness_center"]
+    keys = page.eval_on_selector_all("#results td[data-key]", "cells => cells.map(c => c.dataset.key)")
+    assert set(keys) == set(expected)
+    for map_id in ("map-removal_rate", "map-film_thickness", "map-pressure"):
+        assert page.evaluate(f"document.getElementById('{map_id}').data[0].type") == "heatmap"
+    # a bare number is read in the display unit: 3 (psi) gives the same answer
+    page.fill('#inputs [name="applied_pressure"]', "3")
+    page.click("#solve")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('Solved')")
+    assert float(page.get_attribute('#results td[data-key="film_thickness_center"]', "title")) == expected["film_thickness_center"]
+
+
+def test_a_bad_value_shows_cmpsims_message_beside_its_input(page, server):
+    _open(page, server)
+    for value in ("-3 psi", "3 kg"):  # out of range, wrong dimension
+        with pytest.raises(ValueError) as info:
+            Config.default().replace(applied_pressure=value)
+        page.fill('#inputs [name="applied_pressure"]', value)
+        page.click("#solve")
+        page.wait_for_function(
+            "text => document.querySelector('[data-error-for=\"applied_pressure\"]').textContent === text", arg=str(info.value)
+        )
+        # beside its input: in the same row of the form, and the input is marked
+        row = page.locator('#inputs [name="applied_pressure"]').locator("xpath=..")
+        assert row.locator(".error").text_content() == str(info.value)
+        assert page.get_attribute('#inputs [name="applied_pressure"]', "aria-invalid") == "true"
+    assert page.locator(".error:not(:empty)").count() == 1  # nothing else is blamed
+
+
+def test_a_three_point_sweep_shows_progress_and_draws_its_curve(page, server):
+    _open(page, server)
+    page.evaluate(
+        """() => { window.progressSeen = [];
+        new MutationObserver(() => window.progressSeen.push(document.getElementById('sweep-progress').value))
+          .observe(document.getElementById('sweep-status'), {childList: true, characterData: true, subtree: true}); }"""
+    )
+    page.select_option("#sweep-param-1", "applied_pressure")
+    page.fill("#sweep-start-1", "2")
+    page.fill("#sweep-stop-1", "4")
+    page.fill("#sweep-num-1", "3")
+    page.click("#run-sweep")
+    page.wait_for_selector("#sweep-status[data-state=done]")
+    assert page.text_content("#sweep-status") == "done: 3 of 3 points"
+    assert page.evaluate("[document.getElementById('sweep-progress').value, document.getElementById('sweep-progress').max]") == [3, 3]
+    seen = page.evaluate("window.progressSeen")
+    assert {1, 2, 3} <= set(seen), seen  # the bar moved with each point's event
+    curve = page.evaluate("document.getElementById('sweep-plot').data[0]")
+    assert curve["x"] == [2, 3, 4] and len(curve["y"]) == 3 and all(isinstance(y, float) for y in curve["y"])
+    assert page.is_visible("#download-sweep-file") and page.is_visible("#download-sweep-netcdf")
+
+
+def test_a_failed_sweep_point_is_shown_with_its_message(page, server):
+    _open(page, server)
+    page.fill("#sweep-start-1", "1000")
+    page.fill("#sweep-stop-1", "2000")
+    page.fill("#sweep-num-1", "2")
+    page.click("#run-sweep")
+    page.wait_for_selector("#sweep-status[data-state=done]")
+    failures = page.locator("#sweep-failures li").all_text_contents()
+    assert len(failures) == 2 and all("no equilibrium" in f and "applied_pressure = " in f for f in failures)
+
+
+def test_the_api_reference_page_is_served_by_cmpsim_itself(page, server):
+    page.goto(server.url + "/api/docs")
+    page.wait_for_selector(".route h2")
+    titles = page.locator(".route h2").all_text_contents()
+    assert "POST /api/solve" in titles and "POST /api/sweeps" in titles
+
+
+def test_the_docs_screenshot_script_makes_both_pictures(page, server, tmp_path):
+    made = SHOTS.take_screenshots(page, server.url, tmp_path, grid="coarse", sweep_points=3)
+    assert [p.name for p in made] == ["solved.png", "sweep.png"]
+    for p in made:
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 10_000
+    committed = ROOT / "docs" / "web"
+    assert {p.name for p in made} <= {p.name for p in committed.glob("*.png")}, "run python docs/make_screenshots.py"
