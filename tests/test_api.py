@@ -105,11 +105,11 @@ def test_summary_lists_every_scalar_with_its_display_unit():
     from cmpsim import outputs
 
     r = cmpsim.solve(grid="coarse")
-    lines = r.summary(width=250).splitlines()
-    header = [c.strip() for c in re.split(r"[│┃]", next(ln for ln in lines if ln.startswith("┃")))[1:-1]]
-    cells = {c[0]: c for c in ([x.strip() for x in re.split(r"[│┃]", ln)[1:-1]] for ln in lines if ln.startswith("│")) if c and c[0]}
+    rows = [re.split(r"\s{2,}|\s*[│┃]\s*", ln.strip(" │┃")) for ln in r.summary(width=250).splitlines()]
+    header = next(row for row in rows if row[:1] == ["output"])
+    cells = {row[0]: row for row in rows if len(row) >= len(header) - 1}
     shown = [n for n in outputs.scalar_names() if n in r.scalars]
-    assert shown and set(shown) <= set(cells)
+    assert shown and set(shown) <= set(cells), set(shown) - set(cells)
     for name in shown:
         assert cells[name][header.index("unit")] == (outputs.scalar(name).display_unit or "-"), name
 

@@ -152,7 +152,7 @@ def test_default_cavitation_pressure_is_water_vapour_pressure_below_one_atmosphe
 
 
 def test_cavitation_pressure_above_ambient_is_refused_by_the_problem_too():
-    c = Config.default().replace(slurry_model="newtonian", cavitation="jfo")
+    c = Config.paper().replace(slurry_model="newtonian", cavitation="jfo")  # JFO needs the rigid pad of the paper
     setup_problem = build_problem(c)
     with pytest.raises(ValueError, match=r"cavitation_pressure must be a gauge pressure in \[-101325, 0\] Pa"):
         WaferProblem(setup_problem.grid, 5e-6, 27579.0, 3.2e4, setup_problem.lub, setup_problem.pad,

@@ -1,8 +1,10 @@
-"""Pad compliance (issue 16): the pad stack as a Winkler foundation, solved coupled with the film.
+"""Pad compliance (issue 16): the pad stack as a Winkler foundation or as elastic layers with
+lateral coupling, solved coupled with the film.
 
-The rotation-averaged profile and its non-uniformity are computed here from
-``result.polar["removal_rate"]`` (rings x sectors) by a small helper; once the results-schema
-branch lands they should come from its ``removal_rate_profile`` / ``within_wafer_nonuniformity``.
+The claims about the paper's base case are made on the paper's model (``Config.paper()``) with
+only ``pad_compliance`` changed; the default model (docs/model.md, section 13d) uses the Winkler
+stack already. Profiles and non-uniformity are the registry outputs ``removal_rate_profile`` and
+``within_wafer_nonuniformity`` (3 mm edge exclusion by default).
 """
 
 from __future__ import annotations
@@ -11,7 +13,15 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.compliance import PadLayer, WinklerFoundation, constrained_modulus, foundation_stiffness, local_deflection
+from cmpsim.compliance import (
+    LayeredFoundation,
+    PadLayer,
+    WinklerFoundation,
+    constrained_modulus,
+    foundation_stiffness,
+    layer_stiffness,
+    local_deflection,
+)
 from cmpsim.config import PRESETS, Config
 from cmpsim.geometry import film_thickness
 from cmpsim.grid import PolarGrid
@@ -19,32 +29,46 @@ from cmpsim.model import build_problem
 from cmpsim.setup import pad_foundation
 
 COMPLIANT = {"pad_compliance": "winkler"}
+LAYER = {"pad_compliance": "layer"}
 #: Scalars that are solver diagnostics, not results.
 DIAGNOSTICS = {"load_residual", "moment_residual", "iterations", "factorizations", "converged"}
 
 
+PAPER = Config.paper()
+
+
+def solve(**overrides):
+    """The paper's model with some inputs changed (no relative removal rate)."""
+    return cmpsim.solve(PAPER, relative=False, **overrides)
+
+
 def ring_profile(result) -> tuple[np.ndarray, np.ndarray]:
-    """(ring-centre radii, ring-mean removal rate): the rotation-averaged profile, m and m/s."""
-    return result.grid.r[:, 0], result.polar["removal_rate"].mean(axis=1)
+    """(ring-centre radii, rotation-averaged removal rate), m and m/s."""
+    return result.profiles["radius"], result.removal_rate_profile
 
 
-def wiwnu(result, edge_exclusion: float = 3e-3) -> float:
-    """Area-weighted std / mean of the ring means over the rings with r <= R_w - edge_exclusion."""
-    r, rr = ring_profile(result)
-    keep = r <= result.grid.radius - edge_exclusion
-    a = r[keep]  # ring areas are proportional to r dr
-    mean = np.sum(a * rr[keep]) / np.sum(a)
-    return float(np.sqrt(np.sum(a * (rr[keep] - mean) ** 2) / np.sum(a)) / mean)
+def wiwnu(result, edge_exclusion: float | None = None) -> float:
+    """The registry's within-wafer non-uniformity, or the same with another edge exclusion."""
+    if edge_exclusion is None:
+        return result.within_wafer_nonuniformity
+    from cmpsim.uniformity import uniformity
+
+    return uniformity(result.removal_rate_profile, result.grid.radius, edge_exclusion)[0]
 
 
 @pytest.fixture(scope="module")
 def rigid():
-    return cmpsim.solve(relative=False)
+    return solve()
 
 
 @pytest.fixture(scope="module")
 def compliant():
-    return cmpsim.solve(relative=False, **COMPLIANT)
+    return solve(**COMPLIANT)
+
+
+@pytest.fixture(scope="module")
+def layered():
+    return solve(**LAYER)
 
 
 # ---------------------------------------------------------------------------------- kernels
@@ -68,14 +92,16 @@ def test_layers_in_series_add_their_compliances():
 
 
 def test_the_default_stack_is_ic1000_on_suba_iv_and_subpad_zero_means_none():
-    c = Config.default().replace(**COMPLIANT)
+    c = PAPER.replace(**COMPLIANT)
     k = pad_foundation(c).stiffness
     k_top = constrained_modulus(c.pad_bulk_modulus, c.pad_poisson) / c.pad_thickness
     k_sub = constrained_modulus(c.subpad_modulus, c.subpad_poisson) / c.subpad_thickness
     assert 1.0 / k == pytest.approx(1.0 / k_top + 1.0 / k_sub, rel=1e-14)
     assert c.pad_thickness == pytest.approx(1.27e-3) and c.subpad_thickness == pytest.approx(1.27e-3)
     assert pad_foundation(c.replace(subpad_thickness=0)).stiffness == pytest.approx(k_top, rel=1e-14)
-    assert pad_foundation(Config.default()) is None
+    assert pad_foundation(PAPER) is None
+    # the default model stands on the same stack
+    assert pad_foundation(Config.default()).stiffness == pytest.approx(k, rel=1e-14)
 
 
 def test_paper_preset_stays_rigid_and_hydrodynamic_or_jfo_refuse_a_compliant_pad():
@@ -92,7 +118,7 @@ def test_paper_preset_stays_rigid_and_hydrodynamic_or_jfo_refuse_a_compliant_pad
 
 
 def test_local_deflection_balances_the_foundation_cell_by_cell():
-    problem = build_problem(Config.default().replace(**COMPLIANT))
+    problem = build_problem(PAPER.replace(**COMPLIANT))
     h_rigid = np.linspace(-10e-6, 50e-6, 41)
     w = local_deflection(problem, h_rigid, 0.0)
     p = problem.contact(h_rigid + w)[0]
@@ -116,35 +142,36 @@ def test_polar_interpolation_is_exact_at_cell_centres_and_second_order():
 
 # ---------------------------------------------------------------------------------- limits
 def test_rigid_setting_takes_the_unchanged_rigid_path(rigid):
-    assert build_problem(Config.default()).foundation is None
+    assert build_problem(PAPER).foundation is None
     assert rigid.solution.state.deflection is None and rigid.solution.state.system is not None
     assert np.all(rigid.polar["pad_deflection"] == 0.0)
 
 
 def test_huge_stiffness_reproduces_the_rigid_pad_to_1e_8(rigid):
-    stiff = cmpsim.solve(relative=False, subpad_thickness=0, pad_bulk_modulus="1e22 Pa", **COMPLIANT)
+    stiff = solve(subpad_thickness=0, pad_bulk_modulus="1e22 Pa", **COMPLIANT)
     assert stiff.problem.foundation.stiffness > 1e24
-    angle = abs(rigid.attack_angle_rad)
+    angle = abs(rigid.attack_angle)
     for name, want in rigid.scalars.items():
         if name in DIAGNOSTICS:
             continue
-        atol = 1e-8 * angle if name == "cross_tilt_rad" else 0.0
+        atol = 1e-8 * angle if name == "cross_tilt" else 0.0
         assert stiff.scalars[name] == pytest.approx(want, rel=1e-8, abs=atol), name
     for name, want in rigid.polar.items():
         scale = np.max(np.abs(want)) or 1.0
         assert np.max(np.abs(stiff.polar[name] - want)) <= 1e-8 * scale, name
 
 
-def test_flat_wafer_under_uniform_speed_on_a_winkler_pad_has_uniform_pressure_and_zero_nonuniformity():
+@pytest.mark.parametrize("base", [PAPER, Config.default()], ids=["paper", "default"])
+def test_flat_wafer_under_uniform_speed_on_a_winkler_pad_has_uniform_pressure_and_zero_nonuniformity(base):
     # A flat wafer at zero tilt under a uniform sliding speed: uniform film, the Couette and shear
     # flow fluxes are uniform and the finite volumes preserve them exactly (zero divergence), so
     # p = p0, the contact pressure and the deflection are uniform and the moments vanish by the
     # symmetry of the grid. The uniform state solves the discrete equations exactly: what is left
     # is round-off, not discretisation error.
-    r = cmpsim.solve(relative=False, dome_height=0.0, kinematics="sliding", **COMPLIANT)
+    r = cmpsim.solve(base, relative=False, dome_height=0.0, kinematics="sliding", **COMPLIANT)
     st = r.solution.state
     R, sigma = r.grid.radius, r.config.pad_roughness
-    assert abs(r.attack_angle_rad) * R / sigma < 1e-12 and abs(r.cross_tilt_rad) * R / sigma < 1e-12
+    assert abs(r.attack_angle) * R / sigma < 1e-12 and abs(r.cross_tilt) * R / sigma < 1e-12
     p = st.p_total
     assert np.ptp(p) / p.mean() < 1e-12
     assert np.ptp(st.deflection) / st.deflection.mean() < 1e-12
@@ -162,29 +189,34 @@ def test_flat_wafer_under_uniform_speed_on_a_winkler_pad_has_uniform_pressure_an
         {"subpad_modulus": "0.5 MPa"},
         {"slurry_model": "newtonian"},
         {"slurry_model": "newtonian", "cavitation": "gumbel", "cavitation_pressure": 0.0},
+        "default",
     ],
-    ids=["base", "2psi", "6psi-90rpm", "soft-subpad", "newtonian", "newtonian-gumbel"],
+    ids=["base", "2psi", "6psi-90rpm", "soft-subpad", "newtonian", "newtonian-gumbel", "default-model"],
 )
-def test_load_and_moment_balance_to_1e_9_with_compliance(overrides):
-    r = cmpsim.solve(relative=False, **COMPLIANT, **overrides)
+@pytest.mark.parametrize("compliance", ["winkler", "layer"])
+def test_load_and_moment_balance_to_1e_9_with_compliance(overrides, compliance):
+    r = solve(pad_compliance=compliance, **overrides) if overrides != "default" else cmpsim.solve(relative=False, pad_compliance=compliance)
     st = r.solution.state
     assert r.converged and abs(r.load_residual) < 1e-9 and r.moment_residual < 1e-9
     # the residual is what it claims: integrate the pressure field independently
     g = r.grid
     load = g.integrate(st.p_total) / (r.config.applied_pressure * np.pi * g.radius**2) - 1.0
     assert load == pytest.approx(r.load_residual, abs=1e-12)
-    # and the deflection is the foundation's response to that pressure, cell by cell
-    k = r.problem.foundation.stiffness
-    assert np.max(np.abs(k * st.deflection - st.p_total)) < 1e-9 * r.config.applied_pressure
+    # and the deflection is the foundation's response to that pressure (cell by cell on the bed)
+    f = r.problem.foundation
+    response = st.p_total / f.stiffness if f.local else f.deflection(st.p_total, g)
+    assert np.max(np.abs(response - st.deflection)) * f.stiffness < 1e-9 * r.config.applied_pressure
     # the film the outputs report is the deformed one: the rigid film plus the deflection
     u, c = st.u, r.config
     rigid_centre = film_thickness(0.0, 0.0, u[0], u[1], c.dome_height, g.radius, cross_tilt=u[2])
-    assert r.film_thickness_center_m == pytest.approx(rigid_centre + float(g.interpolate(st.deflection, 0.0, 0.0)), rel=1e-14)
+    assert r.film_thickness_center == pytest.approx(rigid_centre + float(g.interpolate(st.deflection, 0.0, 0.0)), rel=1e-14)
 
 
-def test_equilibrium_jacobian_includes_the_compliance_central_difference(compliant):
-    problem = build_problem(compliant.config)
-    sol_u = compliant.solution.state.u
+@pytest.mark.parametrize("model", ["winkler", "layer"])
+def test_equilibrium_jacobian_includes_the_compliance_central_difference(model, compliant, layered):
+    solved = compliant if model == "winkler" else layered
+    problem = build_problem(solved.config)
+    sol_u = solved.solution.state.u
     u = sol_u + np.array([0.05, 0.3, -0.2]) * problem.u_scale  # off equilibrium
     st = problem.state(u)
     J = problem.jacobian(st)
@@ -196,7 +228,7 @@ def test_equilibrium_jacobian_includes_the_compliance_central_difference(complia
     scale = np.max(np.abs(fd), axis=0)
     assert np.max(np.abs(J - fd) / scale) < 1e-4, (J, fd)
     # a rigid pad at the same position has a much stiffer load response: the compliance is in J
-    rigid = build_problem(compliant.config.replace(pad_compliance="rigid"))
+    rigid = build_problem(solved.config.replace(pad_compliance="rigid"))
     h_shift = st.deflection.mean()  # same mean film
     J_rigid = rigid.jacobian(rigid.state(u + np.array([h_shift, 0.0, 0.0])))
     assert abs(J[0, 0]) < 0.8 * abs(J_rigid[0, 0])
@@ -204,7 +236,7 @@ def test_equilibrium_jacobian_includes_the_compliance_central_difference(complia
 
 def test_deflection_converges_at_second_order_with_the_grid():
     grids = ((10, 24), (20, 48), (40, 96))
-    w = [cmpsim.solve(relative=False, grid=f"{n}x{m}", **COMPLIANT).solution.state.deflection for n, m in grids]
+    w = [solve(grid=f"{n}x{m}", **COMPLIANT).solution.state.deflection for n, m in grids]
     g0 = PolarGrid(1.0, *grids[0])
 
     def restrict(field, levels):
@@ -227,10 +259,74 @@ def test_deflection_converges_at_second_order_with_the_grid():
 
 # ---------------------------------------------------------------------------------- physics
 def test_compliance_flattens_the_removal_profile_and_a_softer_stack_flattens_it_more(rigid, compliant):
-    soft = cmpsim.solve(relative=False, subpad_thickness="2.54 mm", **COMPLIANT)
+    soft = solve(subpad_thickness="2.54 mm", **COMPLIANT)
     w_rigid, w_default, w_soft = wiwnu(rigid), wiwnu(compliant), wiwnu(soft)
     print(f"\nWIWNU (3 mm edge exclusion): rigid {w_rigid:.3f}, default stack {w_default:.3f}, 2x subpad {w_soft:.3f}")
     assert w_rigid > w_default > w_soft
     # the wafer sinks into the pad: the deflection is of the order of P / k
     k = compliant.problem.foundation.stiffness
     assert compliant.polar["pad_deflection"].mean() == pytest.approx(compliant.config.applied_pressure / k, rel=0.2)
+
+
+# ---------------------------------------------------------------------------------- layered pad
+def test_layer_stiffness_tends_to_the_constrained_modulus_and_to_the_half_space():
+    t, e, nu = 1.27e-3, 2.3e6, 0.1
+    q = np.array([0.0, 1e-3, 1.0])  # qt up to 1.3e-3: the deviation is of order (qt)^2
+    assert np.allclose(layer_stiffness(q, t, e, nu), constrained_modulus(e, nu) / t, rtol=1e-6)
+    q = np.array([1e6, 1e7])
+    assert np.allclose(layer_stiffness(q, t, e, nu), 0.5 * e / (1 - nu**2) * q, rtol=1e-12)
+    # continuous where the evaluation switches branch (qt = 1e-4 and 40)
+    for qt in (1e-4, 40.0):
+        a, b = layer_stiffness(np.array([qt * (1 - 1e-9), qt * (1 + 1e-9)]) / t, t, e, nu)
+        assert b == pytest.approx(a, rel=1e-6)
+    # stiffer at shorter wavelengths (a layer spreads a narrow load)
+    k = layer_stiffness(np.logspace(0, 5, 50), t, e, nu)
+    assert np.all(np.diff(k) > 0)
+
+
+def test_layered_pad_deflects_like_the_winkler_bed_under_a_load_much_wider_than_the_stack():
+    c = PAPER
+    f = LayeredFoundation((PadLayer(c.pad_thickness, c.pad_bulk_modulus, c.pad_poisson), PadLayer(c.subpad_thickness, c.subpad_modulus, c.subpad_poisson)))
+    assert f.compliance(np.array([0.0]))[0] == pytest.approx(1.0 / pad_foundation(c.replace(**COMPLIANT)).stiffness, rel=1e-14)
+    g = PolarGrid(0.5 * c.wafer_diameter, 24, 64)
+    w = f.deflection(np.full((24, 64), 1e4), g)
+    # the wafer is 15 coupling lengths wide: its centre deflects like the bed, its edge less
+    assert w[:8].mean() == pytest.approx(1e4 / f.stiffness, rel=1e-4)
+    assert w[-1].mean() < 0.8 * w[0].mean()
+
+
+def test_layer_with_a_vanishing_coupling_length_tends_to_the_winkler_pad(compliant):
+    s = 0.03  # every thickness and modulus x 0.03: the same k, a coupling length of 76 um << dr
+    thin = solve(pad_thickness=1.27e-3 * s, subpad_thickness=1.27e-3 * s, pad_bulk_modulus=300e6 * s, subpad_modulus=2.3e6 * s, **LAYER)
+    assert thin.problem.foundation.stiffness == pytest.approx(compliant.problem.foundation.stiffness, rel=1e-12)
+    assert thin.removal_rate_mean == pytest.approx(compliant.removal_rate_mean, rel=1e-4)
+    assert abs(wiwnu(thin) - wiwnu(compliant)) < 1e-3
+    # what is left is the round trip through the Cartesian grid, at the rim
+    w, w_bed = thin.polar["pad_deflection"], compliant.polar["pad_deflection"]
+    assert np.max(np.abs(w - w_bed)) < 0.02 * w_bed.mean()
+    assert np.max(np.abs(w[:-3] - w_bed[:-3])) < 0.002 * w_bed.mean()
+
+
+def test_layered_pad_concentrates_pressure_at_the_wafer_edge_which_a_winkler_bed_cannot(layered, compliant):
+    flat = {"dome_height": 0.0, "kinematics": "sliding"}
+    bed = solve(**COMPLIANT, **flat).polar["total_pressure"].mean(axis=1)
+    layer = solve(**LAYER, **flat).polar["total_pressure"].mean(axis=1)
+    assert np.ptp(bed) / bed.mean() < 1e-12  # uniform on the bed
+    assert layer[-1] > 1.5 * layer[0]  # the edge concentration
+    assert layer[-4:-1].min() < 0.95 * layer[0]  # and the relieved band inside it
+    # at the base case: a fast edge and a slow band a few millimetres inside it
+    _, rr = ring_profile(layered)
+    assert rr[-1] > 1.3 * rr[0] and rr[-5:-1].min() < 0.8 * rr[0]
+    _, rr_bed = ring_profile(compliant)
+    assert np.all(np.diff(rr_bed) < 0)  # the bed's profile falls monotonically to the edge
+
+
+def test_layered_pad_outputs_converge_with_the_grid():
+    # the edge band is a few millimetres wide: the wafer-mean rate and the non-uniformity converge
+    # (observed order about 2), the edge ring's peak pressure more slowly (docs/model.md)
+    runs = [solve(grid=g, **LAYER) for g in ("10x24", "20x48", "40x96")]
+    rr = [r.removal_rate_mean for r in runs]
+    nu = [wiwnu(r) for r in runs]
+    assert abs(rr[2] - rr[1]) < 0.5 * abs(rr[1] - rr[0])
+    assert abs(nu[2] - nu[1]) < 0.5 * abs(nu[1] - nu[0])
+    assert abs(rr[2] / rr[1] - 1) < 2e-3 and abs(nu[2] - nu[1]) < 5e-3

@@ -20,6 +20,7 @@ def test_values_take_units_and_are_stored_in_si():
 
 
 def test_paper_preset_is_the_papers_base_case():
+    """``Config.paper()`` is Table 1 of the paper with the paper's model (granular slurry, rigid pad, ...)."""
     c = Config.paper()
     assert c.applied_pressure == pytest.approx(parse_value("applied_pressure", "4 psi"))
     assert c.rotation_speed == pytest.approx(parse_value("rotation_speed", "60 rpm"))
@@ -29,6 +30,23 @@ def test_paper_preset_is_the_papers_base_case():
     assert c.wafer_diameter == pytest.approx(0.0762)
     assert (c.w_over_k, c.t_over_a, c.fluctuation_ratio) == (4e-6, 1.0, 3.0)
     assert c.model == "lep"
+    assert (c.slurry_model, c.cavitation, c.pad_compliance, c.removal_law) == ("granular", "none", "rigid", "paper")
+
+
+def test_default_is_the_papers_operating_point_with_the_predictive_physics():
+    """The default model (issue 18) keeps the paper's operating point and changes only the physics of section 13d."""
+    c = Config.default()
+    assert c.applied_pressure == pytest.approx(parse_value("applied_pressure", "4 psi"))
+    assert c.rotation_speed == pytest.approx(parse_value("rotation_speed", "60 rpm"))
+    assert c.particle_diameter == pytest.approx(100e-9)
+    assert c.dome_height == pytest.approx(5e-6)
+    assert c.wafer_diameter == pytest.approx(0.0762)
+    assert c.model == "lep"
+    assert (c.slurry_model, c.cavitation, c.pad_compliance, c.removal_law) == ("newtonian", "gumbel", "winkler", "shear_power")
+    assert c.slurry_viscosity == pytest.approx(5e-3)
+    assert (c.pad_modulus, c.pad_hardness) == (pytest.approx(0.5e9), pytest.approx(50e6))
+    assert (c.asperity_radius, c.pad_roughness, c.reference_roughness) == (
+        pytest.approx(7e-6), pytest.approx(5e-6), pytest.approx(5e-6))
 
 
 @pytest.mark.parametrize(
@@ -101,12 +119,13 @@ def test_parameter_table_in_model_document_is_generated_from_the_registry():
     assert parameter_table_markdown() in doc, "regenerate the table with `cmpsim params --markdown`"
 
 
-def test_paper_preset_differs_from_the_defaults_only_in_the_listed_inputs():
+def test_paper_preset_differs_from_the_defaults_exactly_in_the_listed_inputs():
     from cmpsim.config import PRESETS
 
     paper, default = Config.paper().to_dict(), Config.default().to_dict()
     changed = {k for k in default if paper[k] != default[k]}
-    assert changed <= set(PRESETS["paper"])
+    assert changed == set(PRESETS["paper"])
+    assert PRESETS["default"] == {} and Config.preset("default") == Config.default()
     assert Config.preset("paper") == Config.paper()
     with pytest.raises(ValueError, match="preset must be one of 'default', 'paper'"):
         Config.preset("fast")

@@ -98,8 +98,8 @@ def test_symmetric_film_with_full_sommerfeld_carries_zero_net_load():
 
 @pytest.mark.parametrize("slurry_model", ["granular", "newtonian"])
 def test_fluid_load_and_moment_converge_at_second_order_for_each_slurry_model(slurry_model):
-    """Richardson on 12x32, 24x64, 48x128 grids at the base-case equilibrium position."""
-    c = Config.default().replace(slurry_model=slurry_model)
+    """Richardson on 12x32, 24x64, 48x128 grids at the paper's base-case equilibrium position (rigid pad)."""
+    c = Config.paper().replace(slurry_model=slurry_model)
     u = cmpsim.solve(c, relative=False).solution.state.u
     vals = []
     for n in (12, 24, 48):
@@ -118,8 +118,9 @@ def test_newtonian_at_the_haff_equivalent_viscosity_carries_the_haff_fluid_share
     1.99 % against Haff's 2.46 % at the base case, 0.48 points apart (the target was < 0.5).
     The Haff gauge pressure p0 (e^phi - 1) exceeds the linear p0 phi everywhere (convexity):
     linearising it at the Haff solution alone gives 2.16 %; the rest comes from the grain-flow
-    coefficients at x = sqrt(w/k) h/d ~ 0.56 (Psi 3.5 % below h/2d, g ~ 2.8 instead of 3)."""
-    c = Config.default()
+    coefficients at x = sqrt(w/k) h/d ~ 0.56 (Psi 3.5 % below h/2d, g ~ 2.8 instead of 3).
+    The paper's model (granular slurry, rigid pad) against its Newtonian twin, full Sommerfeld."""
+    c = Config.paper()
     s = physical_setup(c)
     eta = s.ambient_pressure * c.particle_diameter / (c.t_over_a * s.lubrication.fluctuation_velocity)
     haff = cmpsim.solve(c, relative=False)
@@ -131,8 +132,10 @@ def test_newtonian_at_the_haff_equivalent_viscosity_carries_the_haff_fluid_share
     assert 0.4 < gap < 0.5
 
 
-def test_newtonian_result_reports_gauge_fields_and_fluid_share():
-    r = cmpsim.solve(slurry_model="newtonian", relative=False)
+@pytest.mark.parametrize("base", ["paper", "default"])
+def test_newtonian_result_reports_gauge_fields_and_fluid_share(base):
+    """On the paper's rigid pad without cavitation, and in the default model (Gumbel, compliant pad)."""
+    r = cmpsim.solve(Config.preset(base).replace(slurry_model="newtonian"), relative=False)
     st, g = r.solution.state, r.grid
     ar = st.area_ratio
     np.testing.assert_array_equal(r.polar["slurry_pressure"], (1 - ar) * st.p_slurry)
@@ -169,7 +172,7 @@ def test_bad_slurry_inputs_are_refused_naming_the_parameter_and_range(overrides,
 
 @pytest.mark.parametrize("cavitation", ["gumbel", "jfo"])
 def test_cavitation_with_the_granular_slurry_is_refused_before_solving(cavitation):
-    c = Config.default().replace(slurry_model="granular", cavitation=cavitation)
+    c = Config.paper().replace(cavitation=cavitation)  # the paper's granular slurry on its rigid pad
     with pytest.raises(ValueError, match=r"cavitation = .* Newtonian slurry only.*cannot fall below -p0"):
         build_problem(c)
     with pytest.raises(ValueError, match="cavitation"):

@@ -34,16 +34,18 @@ SOLVER = ["converged", "iterations", "factorizations", "load_residual", "moment_
 FIELDS = [
     "film_thickness", "slurry_pressure", "granular_pressure", "contact_pressure", "total_pressure",
     "contact_area_ratio_elastic", "contact_area_ratio_elastoplastic", "contact_area_ratio_plastic",
-    "normal_stress", "shear_stress", "removal_rate",
+    "normal_stress", "shear_stress", "removal_rate", "pad_deflection",
 ]
 OPTIONAL_FIELDS = ["fill_fraction"]
+#: The paper's model (cmpsim 0.1): the 0.1 object and the base-case profile below are its results.
+PAPER = cmpsim.Config.paper()
 #: CF / UDUNITS-2 spellings used by cmpsim.
 CF_UNITS = {"m", "Pa", "m s-1", "1", "rad"}
 
 
 @pytest.fixture(scope="module")
 def base():
-    return cmpsim.solve(grid="coarse")
+    return cmpsim.solve(PAPER, grid="coarse")
 
 
 # ------------------------------------------------------------------------------------- names
@@ -79,7 +81,7 @@ def test_result_scalars_are_the_registry_scalars(base):
     assert list(base.scalars) == VALUES + SOLVER
     d = base.to_dict()
     assert list(d["values"]) == VALUES and list(d["solver"]) == SOLVER
-    roots = cmpsim.solve(grid="coarse", relative=False, check_roots=True)
+    roots = cmpsim.solve(PAPER, grid="coarse", relative=False, check_roots=True)
     assert "moment_roots_found" in roots.to_dict()["solver"] and "removal_rate_relative" not in roots.to_dict()["values"]
 
 
@@ -160,16 +162,19 @@ def test_the_shipped_json_schema_is_generated_from_the_registry_and_the_output_v
     assert set(schema["properties"]["values"]["properties"]) == set(VALUES)
     assert set(schema["properties"]["solver"]["properties"]) == set(SOLVER) | {"moment_roots_found"}
     _check(json.loads(base.to_json()), schema)
-    _check(json.loads(cmpsim.solve(grid="coarse", relative=False, check_roots=True).to_json()), schema)
+    _check(json.loads(cmpsim.solve(grid="coarse", relative=False, check_roots=True).to_json()), schema)  # the default model too
     bad = json.loads(base.to_json())
     bad["values"]["film_thickness_center_m"] = 1.0
     with pytest.raises(AssertionError):
         _check(bad, schema)
 
 
-def test_schema_1_is_the_0_1_object_unchanged(base):
+def test_schema_1_is_the_0_1_object_unchanged():
+    # cmpsim 0.1 printed the reference file on its defaults, i.e. the paper's model: the paper
+    # preset must give the very same object (names, key order, types and numbers)
     ref = json.loads((DATA / "schema1_coarse_v0_1.json").read_text())
-    for got, want in ((base.to_schema1(), ref["plain"]), (cmpsim.solve(grid="coarse", check_roots=True).to_schema1(), ref["check_roots"])):
+    paper = cmpsim.Config.paper().replace(grid="coarse")
+    for got, want in ((cmpsim.solve(paper).to_schema1(), ref["plain"]), (cmpsim.solve(paper, check_roots=True).to_schema1(), ref["check_roots"])):
         assert list(got) == list(want)
         for k, v in want.items():
             assert type(got[k]) is type(v), k
@@ -178,7 +183,7 @@ def test_schema_1_is_the_0_1_object_unchanged(base):
 
 
 def test_cli_schema_1_prints_the_0_1_object_and_a_deprecation_on_stderr(base):
-    res = CliRunner().invoke(main, ["run", "--json", "--schema", "1", "--set", "grid=coarse"])
+    res = CliRunner().invoke(main, ["run", "--preset", "paper", "--json", "--schema", "1", "--set", "grid=coarse"])
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout) == json.loads(base.to_json(schema=1))
     assert "deprecated" in res.stderr
@@ -282,7 +287,7 @@ def test_profiles_integrate_to_the_wafer_means(base):
     assert np.sum(base.film_thickness_profile * areas) / area == pytest.approx(base.film_thickness_mean, rel=1e-13)
     np.testing.assert_allclose(base.radius, (np.arange(g.n_r) + 0.5) * g.dr)
     # with no edge exclusion the WIWNU is the area-weighted spread of the whole profile
-    full = cmpsim.solve(grid="coarse", edge_exclusion=0.0, relative=False)
+    full = cmpsim.solve(PAPER, grid="coarse", edge_exclusion=0.0, relative=False)
     p = full.removal_rate_profile
     std = math.sqrt(np.sum(areas * (p - full.removal_rate_mean) ** 2) / area)
     assert full.within_wafer_nonuniformity == pytest.approx(std / full.removal_rate_mean, rel=1e-10)
@@ -292,7 +297,7 @@ def test_profiles_integrate_to_the_wafer_means(base):
 def test_a_flat_wafer_in_uniform_sliding_polishes_uniformly():
     """Uniform speed, flat wafer: the film is uniform, so the Couette flux is divergence free,
     the slurry gauge pressure vanishes and the pad carries the load uniformly: WIWNU = 0."""
-    r = cmpsim.solve(grid="coarse", kinematics="sliding", dome_height=0.0, relative=False)
+    r = cmpsim.solve(PAPER, grid="coarse", kinematics="sliding", dome_height=0.0, relative=False)
     assert r.converged and r.attack_angle == pytest.approx(0.0, abs=1e-15)
     assert np.ptp(r.polar["contact_pressure"]) <= 1e-12 * r.config.applied_pressure
     assert r.within_wafer_nonuniformity < 1e-13

@@ -21,9 +21,30 @@ def test_shear_power_law_adds_the_weighted_fluid_shear_power():
 
 
 def test_wafer_mean_shear_power_rate_tends_to_preston_when_the_pad_carries_the_whole_load():
-    # at 1 rpm the slurry carries almost nothing: RR -> k_s mu P U over the wafer
-    r = cmpsim.solve(removal_law="shear_power", rotation_speed="1 rpm", grid="coarse", relative=False)
+    # the paper's model (granular slurry, rigid pad) with the shear-power law: at 1 rpm the slurry
+    # carries almost nothing: RR -> k_s mu P U over the wafer
+    r = cmpsim.solve(cmpsim.Config.paper(), removal_law="shear_power", rotation_speed="1 rpm", grid="coarse", relative=False)
     c = r.config
     preston = c.shear_power_coefficient * c.friction_coefficient * c.applied_pressure * r.sliding_speed
     assert r.contact_load_fraction > 0.999
     assert r.removal_rate_mean == pytest.approx(preston * r.contact_load_fraction, rel=1e-9)  # uniform |du|: exact
+
+
+def test_relative_removal_rate_is_nan_with_a_warning_when_the_reference_case_removes_nothing():
+    # a rigid pad with the measured 5 um summits hydroplanes at the reference case: no contact, no removal
+    with pytest.warns(RuntimeWarning, match="removal_rate_relative is undefined"):
+        r = cmpsim.solve(pad_compliance="rigid", grid="coarse")
+    assert np.isnan(r.scalars["removal_rate_relative"])
+    assert '"removal_rate_relative": null' in r.to_json()
+
+
+def test_default_model_removal_is_the_shear_power_of_the_contact_load():
+    """The default model removes by the shear-power law with no fluid shear (fluid_shear_weight 0):
+    under uniform sliding speed (equal platen and carrier speeds) its wafer mean is k_s mu U times
+    the mean contact pressure exactly, whatever share the Newtonian slurry carries."""
+    r = cmpsim.solve(rotation_speed="1 rpm", grid="coarse", relative=False)
+    c = r.config
+    assert (c.removal_law, c.fluid_shear_weight) == ("shear_power", 0.0)
+    preston = c.shear_power_coefficient * c.friction_coefficient * c.applied_pressure * r.sliding_speed
+    assert 0 < r.fluid_load_fraction < 0.05
+    assert r.removal_rate_mean == pytest.approx(preston * r.contact_load_fraction, rel=1e-9)

@@ -316,6 +316,8 @@ dome_height = ["5um", "50mm"]
         ("[axes]\napplied_pressure = {start = '2psi', stop = '6psi', num = 30}\nrotation_speed = {start = '30rpm', stop = '90rpm', num = 30}\n", "more than the maximum of 500"),
         ("[base]\napplied_pressure = '-4psi'\n[axes]\nrotation_speed = ['60rpm']\n", "applied_pressure"),
         ("", "no points"),
+        ("[base]\npreset = 'papr'\n[axes]\nrotation_speed = ['60rpm']\n", "preset must be one of 'default', 'paper'"),
+        ("[base]\npreset = 1\n[axes]\nrotation_speed = ['60rpm']\n", "preset must be a preset name"),
     ],
 )
 def test_bad_sweep_files_fail_before_any_work_naming_the_problem(tmp_path, text, message):
@@ -323,6 +325,16 @@ def test_bad_sweep_files_fail_before_any_work_naming_the_problem(tmp_path, text,
     with pytest.raises(SweepError, match=message):
         sweep(write(tmp_path, text), out=out, workers=0, progress=False, max_points=500)
     assert not out.exists() and not Path(str(out) + ".parts").exists()
+
+
+def test_base_preset_starts_the_sweep_from_that_preset():
+    """`[base] preset = "paper"` is the paper's model with the file's other settings on top,
+    as `preset = "paper"` does in a config file (Config.from_mapping)."""
+    text = "[base]\npreset = 'paper'\ngrid = 'coarse'\npad = {pad_modulus = '200MPa'}\n[axes]\nrotation_speed = ['40rpm', '80rpm']\n"
+    spec = SweepSpec.from_mapping(tomllib.loads(text))
+    assert spec.base == Config.paper().replace(grid="coarse", pad_modulus="200MPa")
+    assert spec.base != Config.default().replace(grid="coarse", pad_modulus="200MPa")
+    assert SweepSpec.from_mapping(tomllib.loads(text.replace("preset = 'paper'", "preset = 'default'"))).base == Config.default().replace(grid="coarse", pad_modulus="200MPa")
 
 
 def test_cli_rejects_a_too_large_sweep_with_exit_status_2(tmp_path):
@@ -415,7 +427,9 @@ def test_shipped_example_sweep_file_is_valid():
 )
 def test_warm_start_agrees_with_cold_start_and_never_costs_more_solves(model, axis):
     name = "rotation_speed" if isinstance(axis, dict) else "pad_modulus"
-    spec = SweepSpec.from_mapping({"base": {"grid": "coarse", "model": model}, "axes": {name: axis}})
+    # the paper's model (rigid pad): the pure hydrodynamic variant has no pad contact, so the
+    # default's compliant Winkler stack does not apply to it; `[base] preset = "paper"` in a file
+    spec = SweepSpec.from_mapping({"base": {"preset": "paper", "grid": "coarse", "model": model}, "axes": {name: axis}})
     warm = sweep(spec, workers=0, progress=False)
     cold = sweep(spec, workers=0, progress=False, warm_start=False)
     assert (warm["status"].values == "ok").all() and (cold["status"].values == "ok").all()

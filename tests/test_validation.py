@@ -27,12 +27,21 @@ SHIPPED = {
     "scarfo_convex_fluid_share",
     "sun2010_real_contact_area",
     "thakurta2001_model_prediction",
+    "lai2001_no_hydroplaning",
 }
+REMOVAL_SERIES = ("mariscal2020_peteos_ceria", "us9499721_t18_2wt", "us9499721_t18_3wt", "us8142675_tP_platinum")
 
 
 @pytest.fixture(scope="module")
 def shipped():
+    """The default (predictive) model on every shipped data set."""
     return validate(grid="coarse")
+
+
+@pytest.fixture(scope="module")
+def shipped_paper():
+    """The paper's model (the paper preset) on every shipped data set."""
+    return validate(config=cmpsim.Config.paper(), grid="coarse")
 
 
 def test_shipped_data_sets_carry_citation_and_provenance():
@@ -57,18 +66,70 @@ def test_validate_without_arguments_runs_every_shipped_data_set(shipped):
     assert all(p.status.startswith("ok") for p in shipped.points)
 
 
-def test_the_model_still_fails_the_scarfo_fluid_share(shipped):
-    """Kept on purpose: the model carries far less load in the slurry than Scarfo et al. measured."""
-    d = shipped.dataset("scarfo_convex_fluid_share")
+def test_the_paper_model_still_fails_the_scarfo_fluid_share(shipped_paper):
+    """Kept on purpose: the paper's model carries far less load in the slurry than Scarfo et al. measured."""
+    d = shipped_paper.dataset("scarfo_convex_fluid_share")
     assert d.failed
-    (p,) = shipped.points_of("scarfo_convex_fluid_share")
+    (p,) = shipped_paper.points_of("scarfo_convex_fluid_share")
     assert p.model < 36.0 and p.agrees is False  # % of the load
 
 
-def test_the_model_still_fails_the_sun_contact_area(shipped):
-    d = shipped.dataset("sun2010_real_contact_area")
+def test_the_paper_model_still_fails_the_sun_contact_area(shipped_paper):
+    d = shipped_paper.dataset("sun2010_real_contact_area")
     assert d.failed
-    assert all(p.model > 3.16 * p.measured for p in shipped.points_of("sun2010_real_contact_area"))
+    assert all(p.model > 3.16 * p.measured for p in shipped_paper.points_of("sun2010_real_contact_area"))
+
+
+def test_the_paper_model_hydroplanes_at_3_9_m_s_against_lai(shipped_paper):
+    d = shipped_paper.dataset("lai2001_no_hydroplaning")
+    assert d.failed
+    assert shipped_paper.points_of("lai2001_no_hydroplaning")[-1].model > 80.0
+
+
+def test_the_paper_model_loses_to_preston_on_every_removal_series(shipped_paper):
+    for name in REMOVAL_SERIES:
+        d = shipped_paper.dataset(name)
+        assert d.loo_rms_model > d.loo_rms_preston, name
+
+
+def test_the_default_model_still_fails_the_scarfo_fluid_share(shipped):
+    """Kept on purpose (docs/model.md, 13d): the compliant pad conforms and the slurry carries ~15 %, not 36-64 %."""
+    d = shipped.dataset("scarfo_convex_fluid_share")
+    assert d.failed
+    (p,) = shipped.points_of("scarfo_convex_fluid_share")
+    assert p.model < 36.0 and p.agrees is False
+
+
+def test_the_default_model_meets_the_sun_contact_area_within_a_factor_3_and_rises_with_load(shipped):
+    d = shipped.dataset("sun2010_real_contact_area")
+    assert d.passed
+    pts = shipped.points_of("sun2010_real_contact_area")
+    assert all(p.measured / 3 < p.model < 3 * p.measured for p in pts)
+    assert [p.model for p in pts] == sorted(p.model for p in pts)  # 2, 4, 6 psi
+
+
+def test_the_default_model_does_not_hydroplane_up_to_3_9_m_s(shipped):
+    d = shipped.dataset("lai2001_no_hydroplaning")
+    assert d.passed
+    assert all(p.model < 80.0 for p in shipped.points_of("lai2001_no_hydroplaning"))
+
+
+def test_the_default_model_beats_the_mean_on_all_four_removal_series(shipped):
+    for name in REMOVAL_SERIES:
+        d = shipped.dataset(name)
+        assert d.loo_rms_model < d.loo_rms_mean and d.passed, name
+
+
+def test_the_default_model_beats_preston_only_on_the_platinum_series(shipped):
+    """Kept on purpose: the target is Preston beaten on two series; the default beats it on one."""
+    beaten = {name for name in REMOVAL_SERIES if shipped.dataset(name).loo_rms_model < shipped.dataset(name).loo_rms_preston}
+    assert beaten == {"us8142675_tP_platinum"}
+
+
+def test_the_default_models_film_stays_far_below_thakurtas_peer_model(shipped):
+    """Kept on purpose: the compliant pad gives a mean film of ~10 um against the peer model's 48 um."""
+    (mean,) = [p for p in shipped.points_of("thakurta2001_model_prediction") if p.quantity == "film_thickness_mean"]
+    assert mean.model < 0.75 * mean.measured
 
 
 def test_thakurta_is_a_labelled_model_to_model_comparison(shipped):

@@ -29,14 +29,16 @@ my_polisher,removal_rate,40.1,nm/min,1.2,absolute,2 psi,30 rpm,run 17
 ...
 ```
 
-In this script the "measurements" are **synthetic**: they are made by the model itself with
-K = 3.5×10⁻¹⁸ m s⁻¹ Pa⁻² and d/s = 40 instead of the defaults (2.5×10⁻¹⁸ and 67), plus 3 %
-Gaussian noise, so that you can see the fit recover known values. Replace the file with yours.
+In this script the "measurements" are **synthetic**: they are made by the paper's model
+(`cmpsim.Config.paper()`, whose granular slurry gives d/s its role and whose removal law is the
+one K belongs to) with K = 3.5×10⁻¹⁸ m s⁻¹ Pa⁻² and d/s = 40 instead of the preset's values
+(2.5×10⁻¹⁸ and 67), plus 3 % Gaussian noise, so that you can see the fit recover known values.
+Replace the file with yours.
 
 ## 2. Fit
 
 ```python
-fit = cmpsim.calibrate("my_measurements.csv", free=["preston_coefficient", "diameter_gap_ratio"])
+fit = cmpsim.calibrate("my_measurements.csv", free=["preston_coefficient", "diameter_gap_ratio"], config=cmpsim.Config.paper())
 print(fit.summary())
 fit.to_toml("calibrated.toml")
 ```
@@ -44,8 +46,8 @@ fit.to_toml("calibrated.toml")
 or, from the command line,
 
 ```bash
-cmpsim calibrate my_measurements.csv --free preston_coefficient diameter_gap_ratio --out calibrated.toml
-cmpsim run calibrated.toml                                   # the calibrated model
+cmpsim calibrate my_measurements.csv --preset paper --free preston_coefficient diameter_gap_ratio --out calibrated.toml
+cmpsim run calibrated.toml                                   # the calibrated model (every input in the file)
 cmpsim validate my_measurements.csv --config calibrated.toml  # model vs data, point by point
 ```
 
@@ -72,7 +74,7 @@ GRID = os.environ.get("CMPSIM_DOCS_GRID", "default")
 OUT = Path(os.environ.get("CMPSIM_DOCS_OUT", Path(__file__).parent / "_output" / Path(__file__).stem))
 OUT.mkdir(parents=True, exist_ok=True)
 
-base = cmpsim.Config.default().replace(grid=GRID)
+base = cmpsim.Config.paper().replace(grid=GRID)  # the paper's model: granular slurry (d/s), the paper's removal law (K)
 pressures_psi = (2.0, 4.0, 6.0)
 speeds_rpm = (30.0, 60.0, 90.0)
 
@@ -113,7 +115,7 @@ p_line = np.linspace(1.5, 6.5, 6)
 fig, ax = plt.subplots(figsize=(7, 4.6), layout="constrained")
 for k, rpm in enumerate(speeds_rpm):
     color = f"C{k}"
-    for config, style, label in ((base, ":", "defaults"), (calibrated, "-", "calibrated")):
+    for config, style, label in ((base, ":", "paper preset"), (calibrated, "-", "calibrated")):
         rr = [cmpsim.solve(config.replace(applied_pressure=f"{p} psi", rotation_speed=f"{rpm} rpm"), relative=False).removal_rate_mean * 1e9 * 60 for p in p_line]
         ax.plot(p_line, rr, style, color=color, label=f"{rpm:.0f} rpm, {label}")
     ax.errorbar(pressures_psi, measured[:, k], yerr=errors[:, k], fmt="o", color=color, capsize=3, label=f"{rpm:.0f} rpm, data")

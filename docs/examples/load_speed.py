@@ -1,7 +1,8 @@
 """# A load and speed study
 
 How the film thickness, attack angle, load sharing and removal rate follow the applied
-pressure and the rotation speed over the paper's range (2–6 psi, 30–90 rpm). This is a plain
+pressure and the rotation speed over the paper's range (2–6 psi, 30–90 rpm), on the paper's
+model (`cmpsim.Config.paper()`: granular slurry, rigid pad), whose trends the page checks. This is a plain
 Python loop over `cmpsim.solve`; for larger studies, in parallel, resumable and written to
 NetCDF, use a [sweep](sweep.md).
 
@@ -45,7 +46,7 @@ outputs = {
 }
 table = {name: np.empty((len(speeds_rpm), len(pressures_psi))) for name in outputs}
 
-base = cmpsim.Config.default().replace(grid=GRID)
+base = cmpsim.Config.paper().replace(grid=GRID)  # the paper's model, whose trends this page states
 print(f"{'P (psi)':>8} {'speed (rpm)':>12} {'h_c (um)':>9} {'theta (urad)':>13} {'slurry %':>9} {'RR (nm/min)':>12}")
 for i, rpm in enumerate(speeds_rpm):
     start = None

@@ -1,7 +1,9 @@
 """# Leaving the model's validity: what the code does
 
-A load sweep far beyond the paper's range (2–6 psi) with the LEP and the elastic variants, to
-show the two limits of the model that a user can run into, and how each is reported. The
+A load sweep far beyond the paper's range (2–6 psi) with the LEP and the elastic variants of
+the paper's model (`cmpsim.Config.paper()`: the paper's Patir–Cheng flow factors and summit
+constants on a rigid pad), to show the two limits of that model that a user can run into, and
+how each is reported. The
 [limitations](../limitations.md) page explains them.
 
 1. **The flow factors' validity (h/σ ≲ 1.22).** As the load rises, the film thins. When the
@@ -37,7 +39,7 @@ GRID = os.environ.get("CMPSIM_DOCS_GRID", "default")
 OUT = Path(os.environ.get("CMPSIM_DOCS_OUT", Path(__file__).parent / "_output" / Path(__file__).stem))
 OUT.mkdir(parents=True, exist_ok=True)
 
-base = cmpsim.Config.default().replace(grid=GRID)
+base = cmpsim.Config.paper().replace(grid=GRID)  # the paper's model, whose limits this page shows
 pressures_psi = np.geomspace(0.5, 250.0, 13)
 names = ("film_thickness_min", "flow_factor_floored_fraction", "attack_angle", "fluid_load_fraction")
 data = {}

@@ -1,14 +1,18 @@
 """# Hydrodynamic, elastic and LEP variants
 
-The paper compares three models of the same wafer (input `model`):
+The paper compares three models of the same wafer (input `model`). This page runs them on
+the paper's model, `cmpsim.Config.paper()` (granular slurry, rigid pad, the paper's summit
+constants): the pure hydrodynamic variant has no pad contact, and the default model's
+compliant pad stack (`pad_compliance = "winkler"`) needs contact, so the default refuses it;
+on the default model, set `pad_compliance = "rigid"` to run it.
 
 | variant | load carried by | contact law |
 |---|---|---|
 | `hydrodynamic` | slurry only | none |
 | `elastic` | slurry + pad summits | Greenwood–Williamson (Hertz) for every summit, to any interference |
-| `lep` (default, the paper's model) | slurry + pad summits | elastic, elastoplastic (Zhao–Maietta–Chang) and plastic (Abbott–Firestone) by interference |
+| `lep` (the default; the paper's model) | slurry + pad summits | elastic, elastoplastic (Zhao–Maietta–Chang) and plastic (Abbott–Firestone) by interference |
 
-This script solves all three over the paper's load range at 60 rpm.
+This script solves all three over the paper's load range at 60 rpm, on `cmpsim.Config.paper()`.
 
 ![The three variants against load](variants.png)
 
@@ -20,8 +24,8 @@ What it shows (the script asserts each statement):
   elastic model instead puts all contact in the elastic regime, with a real area about half the
   LEP one. The removal rates of the two are close because the summit pressure that dominates τ
   is set by the load, not by the contact law.
-- **Hydrodynamic.** Without contact the slurry alone must carry the load. With the default
-  edge pressure p<sub>0</sub> ≈ 32 kPa this happens only at h/σ < 1, where the perturbation
+- **Hydrodynamic.** Without contact the slurry alone must carry the load. With the paper's
+  granular edge pressure p<sub>0</sub> ≈ 32 kPa this happens only at h/σ < 1, where the perturbation
   flow factors of the paper (eq. 8) are no longer positive: the solver regularises them on
   most cell faces (`flow_factor_floored_fraction` ≈ 0.85) and the attack angle comes out
   negative. These results are what the model gives, but they are outside its validity; `cmpsim
@@ -57,7 +61,7 @@ names = (
 data = {v: {n: [] for n in names} for v in variants}
 base_case = {}
 
-base = cmpsim.Config.default().replace(grid=GRID)
+base = cmpsim.Config.paper().replace(grid=GRID)  # the paper's model: rigid pad, granular slurry
 for variant in variants:
     for psi in pressures_psi:
         r = cmpsim.solve(base.replace(model=variant, applied_pressure=f"{psi} psi"))

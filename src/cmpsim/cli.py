@@ -277,13 +277,12 @@ def reproduce_command(out_dir, config_path, preset, assignments, grid):
     Solves every equilibrium behind the figures (load 2-6 psi, speed 30-90 rpm; the paper's
     curves), writes figNN_*.png and figNN_*.csv, and checks each qualitative statement the
     paper makes about them against the data of the run (REPORT.md / REPORT.html, trends.csv).
-    The inputs set the parameters the figures do not vary; they start from the paper preset
-    unless --preset says otherwise.
+    The inputs set the parameters the figures do not vary.
     """
     from .reproduction import reproduce
 
     try:
-        cfg = load_config(config_path, assignments, preset or "paper", grid)  # the paper's figures: the paper's model unless told
+        cfg = load_config(config_path, assignments, preset or "paper", grid)  # the paper's figures: the paper's model by default
     except ValueError as exc:
         _fail(str(exc))
     command = " ".join(
@@ -391,6 +390,7 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
     click.echo(f"wrote {out_path}")
 
 
+# ---- serve command (web/) ----
 @main.command(name="serve")
 @click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on; anything but loopback warns (then use --token).")
 @click.option("--port", type=click.IntRange(1, 65535), default=8000, show_default=True, help="Port to listen on.")
@@ -424,6 +424,9 @@ def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_b
     if workers is not None and scheduler is not None:
         _fail("give either --workers (a local cluster) or --scheduler (an existing cluster), not both")
     serve(host, port, limits=limits, token=token or None, workers=workers, scheduler=scheduler, echo=click.echo, warn=lambda m: click.echo(m, err=True))
+
+
+# ---- end serve command ----
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -31,6 +31,12 @@ odd sectors: every cell then has exactly one face of each colour). The derivativ
 equilibrium residuals with respect to u follows from the same factorisation (implicit
 differentiation, three back-substitutions), and so does a tangent predictor that starts the
 next solve close to its solution.
+
+With lateral coupling (:class:`LayeredFoundation`, ``pad_compliance = "layer"``) the deflection is
+w = C p with a nonlocal compliance C (the top pad as a plate on an elastic subpad layer, applied
+by FFT on a Cartesian auxiliary grid); G becomes k (w - C p), and the same Newton system is
+solved by GMRES preconditioned by the Winkler factorisation of the same stack, whose stiffness k
+is the long-wavelength limit of C.
 """
 
 from __future__ import annotations
@@ -49,6 +55,9 @@ __all__ = [
     "constrained_modulus",
     "foundation_stiffness",
     "WinklerFoundation",
+    "LayeredFoundation",
+    "layer_stiffness",
+    "plate_bending_stiffness",
     "CoupledLinearisation",
     "coupled_state",
     "coupled_jacobian",
@@ -58,7 +67,7 @@ __all__ = [
 ]
 
 #: Values of the ``pad_compliance`` input.
-COMPLIANCE_MODELS = ("rigid", "winkler")
+COMPLIANCE_MODELS = ("rigid", "winkler", "layer")
 
 #: Newton on (phi, w) stops when the last step moved w by less than this many sigma and phi by
 #: less than this; the steps then contract by 0.05 or better, so the error left is far smaller.
@@ -130,9 +139,176 @@ class WinklerFoundation:
         """The foundation of a stack of :class:`PadLayer` in series."""
         return cls(foundation_stiffness(layers))
 
+    #: The deflection at a point depends on the pressure there only.
+    local = True
+
     def deflection(self, pressure):
         """Deflection (m) under a pressure (Pa)."""
         return np.asarray(pressure, dtype=float) / self.stiffness
+
+
+def layer_stiffness(q, thickness: float, modulus: float, poisson: float):
+    """Fourier stiffness p~/w~ (Pa/m) of an elastic layer bonded to a rigid base, frictionless top.
+
+    K(q) = (E* q / 2) [(3 - 4 nu) cosh 2qt + 2 (qt)^2 + 5 - 12 nu + 8 nu^2] / [(3 - 4 nu) sinh 2qt - 2qt]
+    with E* = E / (1 - nu^2), for the surface wave number q (rad/m) of a normal load. It tends to
+    the constrained stiffness M/t as q -> 0 (a Winkler bed) and to the half space E* q / 2 as
+    qt -> inf. The same expression is the finite-thickness correction of ContactMechanics'
+    ``PeriodicFFTElasticHalfSpace`` (Pastewka et al., MIT licence; after Johnson, Greenwood &
+    Higginson, Int. J. Mech. Sci. 27, 383, 1985, for the half space).
+    """
+    q = np.asarray(q, dtype=float)
+    nu, t = poisson, thickness
+    e_star = modulus / (1.0 - nu * nu)
+    out = np.empty_like(q)
+    qt = q * t
+    small = qt < 1e-4
+    out[small] = float(constrained_modulus(modulus, nu)) / t
+    big = qt > 40.0  # the ratio is 1 to round-off
+    out[big] = 0.5 * e_star * q[big]
+    mid = ~(small | big)
+    x = 2.0 * qt[mid]
+    a = 3.0 - 4.0 * nu
+    num = a * np.cosh(x) + 0.5 * x * x + 5.0 - 12.0 * nu + 8.0 * nu * nu
+    den = a * np.sinh(x) - x
+    out[mid] = 0.5 * e_star * q[mid] * num / den
+    return out
+
+
+def plate_bending_stiffness(thickness: float, modulus: float, poisson: float) -> float:
+    """Bending stiffness D = E t^3 / (12 (1 - nu^2)) of a thin plate, N m."""
+    return modulus * thickness**3 / (12.0 * (1.0 - poisson * poisson))
+
+
+@dataclass(frozen=True)
+class LayeredFoundation:
+    """Pad stack with lateral coupling: elastic layers bonded to the platen (``pad_compliance="layer"``).
+
+    One layer: an elastic layer of finite thickness, Fourier stiffness :func:`layer_stiffness`.
+    Two layers (top pad on a softer subpad): the top pad is a thin plate that bends over the
+    subpad, an elastic layer, and compresses locally through its thickness:
+
+        C(q) = t_1 / M_1 + 1 / (D_1 q^4 + K_2(q))        (deflection per pressure, m/Pa).
+
+    C(0) = 1/k of the same layers in series, so a load much wider than the stack deflects it
+    like the Winkler bed of :class:`WinklerFoundation`. The pad outside the wafer carries no
+    load. The deflection of a pressure field on the polar grid is computed on a Cartesian
+    auxiliary grid by FFT (:meth:`operator`).
+    """
+
+    layers: tuple
+
+    local = False
+
+    def __post_init__(self) -> None:
+        if not 1 <= len(self.layers) <= 2 or any(layer.thickness <= 0 for layer in self.layers):
+            raise ValueError("a layered pad has one or two layers of positive thickness (top pad first)")
+
+    @property
+    def stiffness(self) -> float:
+        """Long-wavelength stiffness k = 1 / sum t_i / M_i, Pa/m."""
+        return foundation_stiffness(self.layers)
+
+    @property
+    def local_compliance(self) -> float:
+        """Local (through-thickness) compliance of the top pad when it acts as a plate, m/Pa."""
+        return self.layers[0].compliance if len(self.layers) == 2 else 0.0
+
+    def nonlocal_compliance(self, q):
+        """The part of C(q) that couples neighbouring points, m/Pa."""
+        q = np.asarray(q, dtype=float)
+        if len(self.layers) == 1:
+            top = self.layers[0]
+            return 1.0 / layer_stiffness(q, top.thickness, top.modulus, top.poisson)
+        top, sub = self.layers
+        d = plate_bending_stiffness(top.thickness, top.modulus, top.poisson)
+        return 1.0 / (d * q**4 + layer_stiffness(q, sub.thickness, sub.modulus, sub.poisson))
+
+    def compliance(self, q):
+        """C(q) = w~/p~, m/Pa."""
+        return self.local_compliance + self.nonlocal_compliance(q)
+
+    @property
+    def coupling_length(self) -> float:
+        """How far a load spreads: the stack thickness, or the plate length (D_1/k_2)^(1/4), m."""
+        total = sum(layer.thickness for layer in self.layers)
+        if len(self.layers) == 1:
+            return total
+        top, sub = self.layers
+        d = plate_bending_stiffness(top.thickness, top.modulus, top.poisson)
+        return max(total, (d * sub.compliance) ** 0.25)
+
+    def deflection(self, pressure, grid):
+        """Deflection (m) at the cell centres of ``grid`` under a cell pressure field (Pa)."""
+        p = np.asarray(pressure, dtype=float)
+        return (self.local_compliance * p.ravel() + self.operator(grid).apply(p)).reshape(p.shape)
+
+    def operator(self, grid) -> "_LayerOperator":
+        """The FFT deflection operator of the nonlocal part on ``grid`` (built once, cached)."""
+        key = (self, grid)
+        op = _LAYER_OPERATORS.get(key)
+        if op is None:
+            if len(_LAYER_OPERATORS) > 8:
+                _LAYER_OPERATORS.clear()
+            op = _LAYER_OPERATORS[key] = _LayerOperator(self, grid)
+        return op
+
+
+_LAYER_OPERATORS: dict = {}
+
+
+class _LayerOperator:
+    """Deflection of the nonlocal compliance on a periodic Cartesian grid, seen from the polar grid.
+
+    The square auxiliary grid (spacing dr/2) covers the wafer and a margin of six coupling
+    lengths (at least 4 dr) around it, so that the periodic images of the wafer interact only
+    through tails that have decayed by about e^-12. The pressure of a polar cell field is
+    interpolated to the Cartesian cell centres (PolarGrid.interpolate) and weighted by the
+    share of each Cartesian cell inside the wafer (16 sub-points per cell); the deflection
+    w = IFFT(C(q) FFT(p)) is interpolated back to the polar cell centres (bilinear).
+    """
+
+    def __init__(self, foundation: LayeredFoundation, grid):
+        from scipy.fft import next_fast_len
+
+        R = grid.radius
+        h = 0.5 * grid.dr
+        margin = max(6.0 * foundation.coupling_length, 4.0 * grid.dr)
+        n = next_fast_len(int(np.ceil(2.0 * (R + margin) / h)), real=True)
+        self.n, self.h = n, h
+        c = -0.5 * n * h + (np.arange(n) + 0.5) * h
+        X, Y = np.meshgrid(c, c, indexing="ij")
+        # share of each Cartesian cell inside the wafer, from 4 x 4 sub-points
+        sub = (np.arange(4) + 0.5) / 4.0 - 0.5
+        frac = np.zeros(X.shape)
+        for sx in sub:
+            for sy in sub:
+                frac += (X + sx * h) ** 2 + (Y + sy * h) ** 2 <= R * R
+        frac /= 16.0
+        inside = np.flatnonzero(frac.ravel() > 0)
+        self.inside = inside
+        self.remap = (sp.diags(frac.ravel()[inside]) @ grid.interpolation_matrix(X.ravel()[inside], Y.ravel()[inside])).tocsr()
+        # bilinear from the Cartesian cell centres to the polar cell centres
+        xc, yc = grid.centres
+        fx = (xc.ravel() - c[0]) / h
+        fy = (yc.ravel() - c[0]) / h
+        i0, j0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
+        tx, ty = fx - i0, fy - j0
+        rows = np.repeat(np.arange(grid.size), 4)
+        cols = np.stack([i0 * n + j0, (i0 + 1) * n + j0, i0 * n + j0 + 1, (i0 + 1) * n + j0 + 1], axis=1).ravel()
+        vals = np.stack([(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty], axis=1).ravel()
+        self.sample = sp.csr_matrix((vals, (rows, cols)), shape=(grid.size, n * n))
+        kx = 2.0 * np.pi * np.fft.fftfreq(n, h)
+        ky = 2.0 * np.pi * np.fft.rfftfreq(n, h)
+        q = np.hypot(kx[:, None], ky[None, :])
+        self.kernel = foundation.nonlocal_compliance(q)
+
+    def apply(self, pressure) -> np.ndarray:
+        """Nonlocal deflection (m, flat, cell order) of a polar cell pressure field (Pa)."""
+        p = np.zeros(self.n * self.n)
+        p[self.inside] = self.remap @ np.asarray(pressure, dtype=float).ravel()
+        w = np.fft.irfft2(self.kernel * np.fft.rfft2(p.reshape(self.n, self.n)), s=(self.n, self.n))
+        return self.sample @ w.ravel()
 
 
 # ---------------------------------------------------------------------------------- grid operators
@@ -284,7 +460,11 @@ def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
     rhs = -flux_divergence(problem.grid, coeffs)
     R = A @ phi.ravel() - rhs
     p_abs, p_fluid, contact = _load(problem, phi, h)
-    G = (k * w - p_fluid - contact[0]).ravel()
+    f = problem.foundation
+    if f.local:
+        G = (k * w - p_fluid - contact[0]).ravel()
+    else:  # k (w - C p): the same scale as on the Winkler bed, to which it reduces when C = 1/k
+        G = k * (w.ravel() - f.deflection(p_fluid + contact[0], problem.grid).ravel())
     return _Evaluation(u, phi, w, h, face_h, coeffs, A, rhs, R, G, p_abs, p_fluid, contact)
 
 
@@ -310,12 +490,100 @@ class CoupledLinearisation:
     K: np.ndarray
     u: np.ndarray  # position where it was built
     drift: float = 0.0  # how far the iterate moved since (max |dw| / sigma, |dphi|), summed
+    # ---- layered pad (nonlocal compliance): the system is solved by GMRES, preconditioned by
+    # the Winkler system above (the same stack's long-wave stiffness k)
+    A: sp.csr_matrix | None = None
+    layer: object = None  # (k, deflection: callable pressure -> deflection, sigma) or None
+    krylov_iterations: int = 0
 
     def solve(self, R, G):
-        """(dphi, dw) of the linear system [A R_w; -P_phi K] (dphi, dw) = -(R, G)."""
+        """(dphi, dw) of the Newton system (dphi, dw) = -J^-1 (R, G).
+
+        Winkler bed: J = [A R_w; -P_phi K], solved exactly with the factorisation. Layered pad:
+        the second row is k (dw - C (P_phi dphi + P_h dw)) with the nonlocal C; GMRES on the
+        system left-preconditioned by the Winkler one.
+        """
+        if self.layer is None:
+            return self._solve_local(R, G)
+        return self._solve_layer(R, G)
+
+    def _solve_local(self, R, G):
         dphi = np.asarray(self.factor.solve(-R + self.R_w @ (G / self.K)))
         dw = (self.P_phi * dphi - G) / self.K
         return dphi, dw
+
+    def deflection(self, pressure):
+        """C p (m) for a flat cell field (Pa): p / k on a Winkler bed."""
+        if self.layer is None:
+            return pressure / (self.K + self.P_h)
+        return self.layer[1](pressure)
+
+    def _solve_layer(self, R, G):
+        k, deflect, sigma = self.layer
+        n = R.size
+
+        def precondition(r1, r2):  # the Winkler system: J_W^-1 (r1, r2)
+            a, b = self._solve_local(-r1, -r2)
+            return np.concatenate([a, b / sigma])
+
+        def matvec(x):
+            self.krylov_iterations += 1
+            dphi, dw = x[:n], x[n:] * sigma
+            r1 = self.A @ dphi + self.R_w @ dw
+            r2 = k * (dw - deflect(self.P_phi * dphi + self.P_h * dw))
+            return precondition(r1, r2)
+
+        rhs = precondition(-R, -G)  # the Winkler step
+        if not np.any(rhs):
+            return np.zeros(n), np.zeros(n)
+        # an inexact Newton step: 1e-6 of the step is far below what the outer iterations need
+        x = _gmres(matvec, rhs, x0=rhs, rtol=1e-6, max_iter=200)
+        return x[:n], x[n:] * sigma
+
+
+def _gmres(matvec, b, x0, rtol: float, max_iter: int) -> np.ndarray:
+    """Solve M x = b by GMRES without restart (modified Gram-Schmidt, Givens rotations).
+
+    For the well-clustered, left-preconditioned systems of the layered pad (30-100 iterations),
+    this is much cheaper than a general restarted implementation on long vectors.
+    Raises ValueError if the relative residual is not below ``rtol`` after ``max_iter``.
+    """
+    r = b - matvec(x0)
+    beta = np.linalg.norm(r)
+    target = rtol * np.linalg.norm(b)
+    if beta <= target:
+        return x0
+    V = np.empty((max_iter + 1, b.size))
+    H = np.zeros((max_iter + 1, max_iter))
+    cs, sn = np.zeros(max_iter), np.zeros(max_iter)
+    g = np.zeros(max_iter + 1)
+    g[0] = beta
+    V[0] = r / beta
+    for j in range(max_iter):
+        w = matvec(V[j])
+        for i in range(j + 1):
+            H[i, j] = w @ V[i]
+            w -= H[i, j] * V[i]
+        H[j + 1, j] = np.linalg.norm(w)
+        breakdown = H[j + 1, j] == 0.0  # the Krylov space is invariant: the solution is in it
+        if not breakdown:
+            V[j + 1] = w / H[j + 1, j]
+        for i in range(j):  # apply the earlier rotations to the new column
+            a, c = H[i, j], H[i + 1, j]
+            H[i, j], H[i + 1, j] = cs[i] * a + sn[i] * c, -sn[i] * a + cs[i] * c
+        rho = np.hypot(H[j, j], H[j + 1, j])
+        cs[j], sn[j] = H[j, j] / rho, H[j + 1, j] / rho
+        H[j, j], H[j + 1, j] = rho, 0.0
+        g[j + 1] = -sn[j] * g[j]
+        g[j] = cs[j] * g[j]
+        if abs(g[j + 1]) <= target or breakdown:
+            break
+    else:
+        if abs(g[max_iter]) > 1e-6 * beta:
+            raise ValueError(f"GMRES on the layered pad did not converge (relative residual {abs(g[max_iter]) / beta:.2g})")
+    m = j + 1
+    y = np.linalg.solve(np.triu(H[:m, :m]), g[:m])
+    return x0 + y @ V[:m]
 
 
 def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
@@ -346,9 +614,15 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
     K = k - P_h
     S = (ev.matrix + R_w @ sp.diags(P_phi / K)).tocsr()
-    factor = factorize(S)
+    factor = (problem.solver or factorize)(S)
     problem.factorizations += 1
-    return CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
+    lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
+    f = problem.foundation
+    if not f.local:
+        grid = problem.grid
+        lin.A = ev.matrix
+        lin.layer = (k, lambda p: f.deflection(p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma)
+    return lin
 
 
 # ---------------------------------------------------------------------------------- local solve
@@ -412,10 +686,14 @@ def coupled_state(problem, u):
     for _ in range(_MAX_INNER):
         dphi = dw = None
         if lin is not None:  # chord step with the factorisation at hand
-            dphi, dw = lin.solve(ev.R, ev.G)
+            # (on a layered pad, judge by the cheap Winkler step before paying for GMRES)
+            dphi, dw = lin.solve(ev.R, ev.G) if lin.layer is None else lin._solve_local(ev.R, ev.G)
             size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
             if size > (_REUSE_FIRST if prev is None else _CONTRACTION * prev):
                 dphi = None
+            elif lin.layer is not None:
+                dphi, dw = lin.solve(ev.R, ev.G)
+                size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
         if dphi is None:  # Newton step: factorise at the current iterate
             lin = _linearise(problem, ev, ops)
             dphi, dw = lin.solve(ev.R, ev.G)
@@ -480,7 +758,7 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
         R = assemble_operator(problem.grid, coeffs) @ st.phi.ravel() + flux_divergence(problem.grid, coeffs)
         dR = (R - R0) / du[k]
         dh = ((_rigid_film(problem, u, problem.xc, problem.yc) - hc) / du[k]).ravel()
-        dG = -lin.P_h * dh
+        dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)
         dphi, dw = lin.solve(dR, dG)
         problem.back_substitutions += 1
         dP = lin.P_phi * dphi + lin.P_h * (dh + dw)

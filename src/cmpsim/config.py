@@ -137,7 +137,7 @@ PARAMETERS: dict[str, Param] = {
         _P("peklenik_number", "pad", "gamma", "", "", 1.0, "Peklenik number of the pad roughness (1 = isotropic)", "Paper section 3.1", 0.0),
         _P("roughness_angle", "pad", "theta_1", "rad", "deg", 0.0, "Orientation of the pad roughness from the sliding direction", "Paper (isotropic: irrelevant)"),
         # pad stack under the asperity layer (pad compliance; docs/model.md, "Pad compliance")
-        _P("pad_compliance", "pad", "-", "choice", "", "winkler", "Bulk deformation of the pad: none (the paper), or a local elastic (Winkler) foundation of the pad and subpad layers in series", "docs/model.md ('Pad compliance'); 'rigid' is the paper's model", choices=("rigid", "winkler")),
+        _P("pad_compliance", "pad", "-", "choice", "", "winkler", "Bulk deformation of the pad: none (the paper); a local elastic (Winkler) foundation of the pad and subpad layers in series; or elastic layers with lateral coupling (top pad as a plate on an elastic subpad layer, by FFT)", "docs/model.md ('Pad compliance'); 'rigid' is the paper's model", choices=("rigid", "winkler", "layer")),
         _P("pad_thickness", "pad", "t_1", "m", "mm", 1.27e-3, "Thickness of the top pad (bulk under the asperities)", "IC1000: 50 mil = 1.27 mm (Pureon IC1000/IC1010 datasheet 2024, read in a transcription); see docs/model.md", 0.0),
         _P("pad_bulk_modulus", "pad", "E_b", "Pa", "MPa", 300e6, "Young's modulus of the top pad's bulk (porous polyurethane)", "Wet IC1000: 0.3-0.5 GPa (Eusner et al., JES 156 H528, 2009; Saka et al., CIRP Ann. 57, 341, 2008), lower end; see docs/model.md", 0.0),
         _P("subpad_thickness", "pad", "t_2", "m", "mm", 1.27e-3, "Thickness of the subpad (0 = no subpad)", "Suba IV sub-pad, 50 mil as commonly stacked under IC1000 (assumed: no datasheet found); see docs/model.md", 0.0, None, False),
@@ -166,7 +166,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "slurry_model": "granular",
         "cavitation": "none",
         "pad_compliance": "rigid",
-        # SI floats, as the defaults of cmpsim 0.1.0 were: the preset is that model to the last bit
+        # SI floats, exactly the defaults of cmpsim 0.1.0 ("15 um" would parse to 1.4999999999999999e-05 m)
         "pad_modulus": 100e6,
         "pad_hardness": 9.4e6,
         "asperity_radius": 50e-6,
@@ -210,13 +210,13 @@ def _check_consistency(c: "Config") -> None:
         )
     if c.pad.pad_compliance != "rigid" and c.cavitation == "jfo":
         raise ValueError(
-            "cavitation = 'jfo' is not available with pad_compliance = 'winkler' (the mass-conserving active set is not "
+            f"cavitation = 'jfo' is not available with pad_compliance = {c.pad.pad_compliance!r} (the mass-conserving active set is not "
             "coupled to the pad deflection): valid values 'none' or 'gumbel', or use pad_compliance = 'rigid'"
         )
     if c.pad.pad_compliance != "rigid" and c.pad.pad_poisson >= 0.5:
         raise ValueError(
             f"pad_poisson = {c.pad.pad_poisson:g} makes the compliant pad infinitely stiff (an incompressible bonded layer): "
-            "valid range [0, 0.5) with pad_compliance = 'winkler'"
+            f"valid range [0, 0.5) with pad_compliance = {c.pad.pad_compliance!r}"
         )
     limit = MAX_PARTICLE_ROUGHNESS_RATIO * c.pad.pad_roughness
     if c.slurry.particle_diameter >= limit:
@@ -290,7 +290,9 @@ class Config:
 
     @classmethod
     def default(cls) -> "Config":
-        """The paper's base case (Table 1) plus the cited defaults of docs/model.md."""
+        """The default, predictive model at the paper's operating point (3-inch wafer, 5 um dome,
+        4 psi, 60 rpm): Newtonian slurry, Gumbel cavitation, compliant pad stack, measured IC1000
+        summits, shear-power removal (docs/model.md, section 13d). :meth:`paper` is the paper's model."""
         return cls()
 
     @classmethod

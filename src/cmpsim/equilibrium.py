@@ -136,7 +136,7 @@ class WaferProblem:
         The granular slurry takes only "none" (its gauge pressure is bounded below by -p0).
     cavitation_pressure : float, optional
         p_cav, gauge, Pa, in [-101325, 0]; required unless ``cavitation == "none"``.
-    foundation : compliance.WinklerFoundation or None
+    foundation : compliance.WinklerFoundation, compliance.LayeredFoundation or None
         Elastic pad stack under the asperity layer; ``None`` = rigid pad (the paper).
     solver : callable, optional
         Sparse solver of every pressure solve, passed to the Reynolds (or cavitation) system
@@ -155,7 +155,7 @@ class WaferProblem:
         separation_offset: float = 0.0,
         cavitation: str = "none",
         cavitation_pressure: float | None = None,
-        foundation: compliance.WinklerFoundation | None = None,
+        foundation: compliance.WinklerFoundation | compliance.LayeredFoundation | None = None,
         solver=None,
     ):
         if variant not in MODEL_VARIANTS:

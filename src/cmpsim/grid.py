@@ -142,12 +142,23 @@ class PolarGrid:
         None, the linear extrapolation 1.5 f_last - 0.5 f_previous over the last half ring:
         second order for a smooth field. Points beyond the rim are extrapolated likewise.
         """
-        f = np.asarray(field, dtype=float)
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        if edge_value is None:
+            return (self.interpolation_matrix(x.ravel(), y.ravel()) @ np.asarray(field, dtype=float).ravel()).reshape(x.shape)
+        m, rim = self.interpolation_matrix(x.ravel(), y.ravel(), rim_separate=True)
+        return (m @ np.asarray(field, dtype=float).ravel() + rim * float(edge_value)).reshape(x.shape)
+
+    def interpolation_matrix(self, x, y, rim_separate: bool = False):
+        """Sparse matrix (points x cells) of :meth:`interpolate` at the points (x, y), m.
+
+        With ``rim_separate`` the rim nodes are not extrapolated from the cells: returns the
+        matrix and, per point, the weight of the rim value (for a given edge value).
+        """
+        import scipy.sparse as sp
+
+        x = np.asarray(x, dtype=float).ravel()
+        y = np.asarray(y, dtype=float).ravel()
         n_r, n_t, dr, dth = self.n_r, self.n_theta, self.dr, self.dtheta
-        rim = 1.5 * f[-1] - 0.5 * f[-2] if edge_value is None else np.full(n_t, float(edge_value))
-        # radial nodes 0, r_0 .. r_{n-1}, R  ->  values centre, rings, rim
-        nodes = np.vstack([np.full(n_t, f[0].mean()), f, rim])
         r_nodes = np.concatenate([[0.0], (np.arange(n_r) + 0.5) * dr, [self.radius]])
         r = np.hypot(x, y)
         s = np.mod(np.arctan2(y, x), 2.0 * np.pi) / dth - 0.5  # fractional sector index
@@ -156,9 +167,33 @@ class PolarGrid:
         k = np.clip(np.searchsorted(r_nodes, r, side="right") - 1, 0, n_r)
         a = (r - r_nodes[k]) / (r_nodes[k + 1] - r_nodes[k])
         ja, jb = np.mod(j0, n_t), np.mod(j0 + 1, n_t)
-        lower = (1.0 - t) * nodes[k, ja] + t * nodes[k, jb]
-        upper = (1.0 - t) * nodes[k + 1, ja] + t * nodes[k + 1, jb]
-        return (1.0 - a) * lower + a * upper
+        rows, cols, vals = [], [], []
+        rim = np.zeros(x.size)
+        point = np.arange(x.size)
+        # node (ring index kk in 0..n_r+1 of the radial nodes, sector j) with weight wgt
+        for kk, wk in ((k, 1.0 - a), (k + 1, a)):
+            for jj, wj in ((ja, 1.0 - t), (jb, t)):
+                wgt = wk * wj
+                centre = kk == 0
+                ring = (kk >= 1) & (kk <= n_r)
+                edge = kk == n_r + 1
+                if np.any(centre):  # mean of the first ring
+                    p = np.repeat(point[centre], n_t)
+                    rows.append(p)
+                    cols.append(np.tile(np.arange(n_t), int(centre.sum())))
+                    vals.append(np.repeat(wgt[centre] / n_t, n_t))
+                rows.append(point[ring])
+                cols.append((kk[ring] - 1) * n_t + jj[ring])
+                vals.append(wgt[ring])
+                if rim_separate:
+                    rim[edge] += wgt[edge]
+                else:  # 1.5 f_last - 0.5 f_previous
+                    for ring_index, c in ((n_r - 1, 1.5), (n_r - 2, -0.5)):
+                        rows.append(point[edge])
+                        cols.append(ring_index * n_t + jj[edge])
+                        vals.append(c * wgt[edge])
+        m = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(x.size, self.size))
+        return (m, rim) if rim_separate else m
 
     def index(self, i, j) -> np.ndarray:
         """Linear unknown index of cell (i, j), with j taken modulo n_theta."""

@@ -53,12 +53,12 @@ def solve(
     Parameters
     ----------
     config : Config, optional
-        Inputs; default :meth:`Config.default` (the paper's base case).
+        Inputs; default :meth:`Config.default` (the predictive model at the paper's base operating point; :meth:`Config.paper` is the paper's model).
     start : array_like, optional
         Initial (h0 [m], attack angle [rad], cross tilt [rad]) for Newton (warm start).
     relative : bool
         Also give ``removal_rate_relative``: the removal rate over that of the reference case
-        (:func:`reference_config`: LEP model, d = 100 nm, sigma = 15 um, 4 psi, 60 rpm, other
+        (:func:`reference_config`: LEP model, d = 100 nm, sigma = reference_roughness (15 um in the paper preset), 4 psi, 60 rpm, other
         inputs equal), solved from the cold start once per process unless given.
     check_roots : bool
         Also scan the attack angle for other moment roots (about 13 load balances); adds
@@ -98,7 +98,18 @@ def solve(
             ref = reference_config(config)
             same = ref.to_dict() == config.to_dict()  # the reference case itself: ratio 1
             reference_removal_rate = scalars["removal_rate_mean"] if same else _reference_removal_rate(ref)
-        scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
+        if reference_removal_rate > 0:
+            scalars["removal_rate_relative"] = scalars["removal_rate_mean"] / reference_removal_rate
+        else:  # the reference case removes nothing (e.g. the wafer hydroplanes there): no ratio exists
+            import warnings
+
+            warnings.warn(
+                "removal_rate_relative is undefined (NaN, null in JSON): the reference case "
+                "(LEP, 4 psi, 60 rpm, d = 100 nm, sigma = reference_roughness) removes nothing",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            scalars["removal_rate_relative"] = float("nan")
     scan = None
     if check_roots:
         scan = scan_moment_roots(problem, sol)

@@ -75,7 +75,7 @@ class Output:
     kind: str  # value | diagnostic | field | profile | coordinate
     unit: str  # SI, CF/UDUNITS-2 syntax
     long_name: str
-    display_unit: str  # unit of tables and plots
+    display_unit: str  # unit of tables and plots ("-" for counts and flags)
     display_factor: float  # display value = SI value * display_factor
     reduction: str  # a key of REDUCTIONS
     of: tuple[str, ...] = ()  # the outputs it reduces
@@ -112,7 +112,7 @@ class Output:
             attrs["units"] = self.unit
         if self.reduction == "wafer_mean":
             attrs["cell_methods"] = "area: mean"
-        if self.display_unit not in (self.unit, ""):
+        if self.display_unit not in (self.unit, "", "-"):
             attrs["display_units"] = self.display_unit
         return attrs
 
@@ -142,13 +142,13 @@ _OUTPUT_LIST = [
     _O("within_wafer_nonuniformity", "value", "1", "within-wafer non-uniformity of the removal rate: 1-sigma / mean of removal_rate_profile, edge excluded", "%", 100.0, "profile_std_over_mean", ("removal_rate_profile",)),
     _O("removal_rate_range", "value", "m s-1", "max - min of removal_rate_profile, edge excluded", "nm/min", 6e10, "profile_range", ("removal_rate_profile",)),
     # ------------------------------------------------------------------ solver diagnostics
-    _O("converged", "diagnostic", "1", "equilibrium converged (load and moment residuals below the tolerance)", "", 1.0, "solver", dtype="bool", schema1="converged", flag_meanings=("not_converged", "converged")),
-    _O("iterations", "diagnostic", "1", "Newton iterations", "", 1.0, "solver", dtype="int", schema1="iterations"),
-    _O("factorizations", "diagnostic", "1", "sparse LU factorizations (pressure solves)", "", 1.0, "solver", dtype="int", schema1="factorizations"),
+    _O("converged", "diagnostic", "1", "equilibrium converged (load and moment residuals below the tolerance)", "-", 1.0, "solver", dtype="bool", schema1="converged", flag_meanings=("not_converged", "converged")),
+    _O("iterations", "diagnostic", "1", "Newton iterations", "-", 1.0, "solver", dtype="int", schema1="iterations"),
+    _O("factorizations", "diagnostic", "1", "sparse LU factorizations (pressure solves)", "-", 1.0, "solver", dtype="int", schema1="factorizations"),
     _O("load_residual", "diagnostic", "1", "relative load residual", "1", 1.0, "solver", schema1="load_residual"),
     _O("moment_residual", "diagnostic", "1", "relative moment residual (max of the two axes)", "1", 1.0, "solver", schema1="moment_residual"),
     _O("flow_factor_floored_fraction", "diagnostic", "1", "share of the faces where the flow-factor tensor was regularised", "%", 100.0, "solver", schema1="flow_factor_floored_fraction"),
-    _O("moment_roots_found", "diagnostic", "1", "moment roots found by the attack-angle scan (--check-roots)", "", 1.0, "solver", dtype="int", schema1="moment_roots_found", optional=True),
+    _O("moment_roots_found", "diagnostic", "1", "moment roots found by the attack-angle scan (--check-roots)", "-", 1.0, "solver", dtype="int", schema1="moment_roots_found", optional=True),
     # ------------------------------------------------------------------ fields (wafer maps)
     _O("film_thickness", "field", "m", "film thickness h (eq. 30)", "um", 1e6, "field"),
     _O("slurry_pressure", "field", "Pa", "slurry (granular) gauge pressure on the wafer, (1 - A_r/A_n)(p - p0)", "kPa", 1e-3, "field"),

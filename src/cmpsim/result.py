@@ -193,11 +193,11 @@ class Result:
                 text = str(v)
             else:
                 text = f"{_reg.to_display(o, v):.6g}"
-            rows.append((name, text, o.display_unit or "-", o.long_name))
+            rows.append((name, text, o.display_unit, o.long_name))
         return rows
 
-    def summary_table(self, width: int = 80):
-        """:meth:`summary_rows` as a ``rich`` table legible at ``width`` columns (names never cut)."""
+    def summary_table(self, width: int = 80, plain: bool = False):
+        """:meth:`summary_rows` as a ``rich`` table legible at ``width`` columns (names never cut; ``plain``: no box lines)."""
         from .tables import legible_table
 
         rows = self.summary_rows()
@@ -211,13 +211,14 @@ class Result:
             detail_header="meaning",
             width=width,
             sections=(n_values - 1,),
+            plain=plain,
         )
 
     def summary(self, width: int = 80) -> str:
         """A plain-text table of every scalar with its unit and meaning, ``width`` columns wide."""
         from .tables import render_text
 
-        return render_text(self.summary_table(width), width)
+        return render_text(self.summary_table(width, plain=True), width)
 
     @property
     def provenance(self) -> dict[str, Any]:

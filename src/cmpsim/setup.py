@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .compliance import PadLayer, WinklerFoundation
+from .compliance import LayeredFoundation, PadLayer, WinklerFoundation
 from .config import Config
 from .contact import PadSurface
 from .equilibrium import WaferProblem
@@ -36,7 +36,7 @@ class PhysicalSetup:
     lubrication: LubricationParameters
     ambient_pressure: float  # p0, Pa
     grid: PolarGrid
-    foundation: WinklerFoundation | None = None  # pad stack under the asperities; None = rigid
+    foundation: WinklerFoundation | LayeredFoundation | None = None  # pad stack under the asperities; None = rigid
 
 
 def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
@@ -44,13 +44,15 @@ def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
     return 1.0 / ((1.0 - nu1**2) / e1 + (1.0 - nu2**2) / e2)
 
 
-def pad_foundation(config: Config) -> WinklerFoundation | None:
-    """The elastic foundation of the pad stack (top pad + subpad in series), or None if rigid."""
+def pad_foundation(config: Config) -> WinklerFoundation | LayeredFoundation | None:
+    """The elastic foundation of the pad stack (top pad + subpad), or None if rigid."""
     if config.pad_compliance == "rigid":
         return None
     layers = [PadLayer(config.pad_thickness, config.pad_bulk_modulus, config.pad_poisson)]
     if config.subpad_thickness > 0:
         layers.append(PadLayer(config.subpad_thickness, config.subpad_modulus, config.subpad_poisson))
+    if config.pad_compliance == "layer":
+        return LayeredFoundation(tuple(layers))
     return WinklerFoundation.from_layers(layers)
 
 

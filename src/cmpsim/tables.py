@@ -18,20 +18,22 @@ WIDE = 110
 MAX_CELL = 28
 
 
-def legible_table(title: str, header: list[str], rows: list[tuple], detail: list[str] | None = None, detail_header: str = "", width: int = 80, sections: tuple[int, ...] = ()):
+def legible_table(title: str, header: list[str], rows: list[tuple], detail: list[str] | None = None, detail_header: str = "", width: int = 80, sections: tuple[int, ...] = (), plain: bool = False):
     """A ``rich`` Table of ``rows``; ``detail[i]`` is the long text of row i.
 
     The first column is never wrapped or cut (its minimum width is its longest cell). With
     ``width >= WIDE`` the detail is the last column; otherwise it is stacked, dimmed, under
-    the first cell. ``sections`` are row indices after which a rule is drawn.
+    the first cell. ``sections`` are row indices after which a rule is drawn. ``plain``: no box
+    lines (columns separated by spaces), for text that is printed or logged.
     """
+    from rich import box
     from rich.table import Table
     from rich.text import Text
 
     names = [str(r[0]) for r in rows]
     name_width = max([len(header[0]), *map(len, names)])
     stacked = detail is not None and width < WIDE
-    t = Table(title=title, show_lines=False, width=None, expand=False, title_justify="left")
+    t = Table(title=title, show_lines=False, width=None, expand=False, title_justify="left", box=None if plain else box.HEAVY_HEAD, pad_edge=not plain)
     t.add_column(header[0] if not stacked else f"{header[0]} / {detail_header}", min_width=name_width, overflow="fold")
     for i, h in enumerate(header[1:], start=1):
         t.add_column(h, justify="right" if i == 1 and len(header) > 2 else "left", overflow="fold", max_width=MAX_CELL)

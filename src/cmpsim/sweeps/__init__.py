@@ -3,7 +3,8 @@
 A sweep file (TOML, see docs/sweeps.md and ``cmpsim/data/example_sweep.toml``) holds
 
 * ``[base]``: any ``cmpsim run`` setting (same names, values with units), flat or in the
-  sections of a config file (``[base.process]``);
+  sections of a config file (``[base.process]``); ``preset = "paper"`` starts from that
+  preset (:meth:`cmpsim.Config.from_mapping`);
 * ``[axes]``: one key per swept setting, a list (``applied_pressure = ["2psi", "4psi"]``) or a
   range (``rotation_speed = {start = "30rpm", stop = "90rpm", num = 7}``, optional
   ``scale = "log"``); the sweep is their outer product;

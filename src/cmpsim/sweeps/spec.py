@@ -170,7 +170,10 @@ class SweepSpec:
         if not isinstance(base_data, Mapping):
             raise SweepError(f"{where}: [base] must be a table of settings")
         for k, v in base_data.items():
-            if k in _SECTIONS and isinstance(v, Mapping):
+            if k == "preset":  # `preset = "paper"`: the base starts from that preset (Config.from_mapping)
+                if not isinstance(v, str):
+                    raise SweepError(f"{where}: [base] preset must be a preset name (a string); got {v!r}")
+            elif k in _SECTIONS and isinstance(v, Mapping):
                 for kk in v:
                     if kk not in PARAMETERS:
                         raise SweepError(f"{where}: unknown setting {kk!r} in [base.{k}] (see `cmpsim params`)")

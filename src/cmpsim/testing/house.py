@@ -2,9 +2,8 @@
 
 :data:`FLOORS` lists the floors from the bottom up, each with its rooms (modules, or
 packages with rooms of their own). A module may import from its own floor and the floors
-below it, never from a floor above; the kernels import nothing of cmpsim at all. ``io``,
-``tables`` and ``_version`` are utilities that every floor may import and that import nothing
-of cmpsim.
+below it, never from a floor above; the kernels import nothing of cmpsim at all. ``io`` and
+``_version`` (and ``tables``, the terminal tables) are utilities that every floor may import and that import nothing of cmpsim.
 The rule holds for every import, at the top of a module or inside a function.
 
 ``tests/test_house.py`` checks the rule on the source (parsed with :mod:`ast`, nothing is
@@ -21,10 +20,10 @@ __all__ = ["FLOORS", "UTILITIES", "source_modules", "imports_of", "floor_of", "v
 
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("kernels", "pure vectorised physics, each function an equation", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "uniformity")),
+    ("kernels", "pure vectorised physics, each function an equation of the paper; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "uniformity")),
     ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems", ("grid", "reynolds", "cavitation")),
-    ("solver", "force and moment balance of the wafer (Newton); the compliant pad's coupled solve", ("equilibrium", "compliance")),
-    ("inputs and outputs", "the registries: every input with its unit, range and source; every output", ("units", "config", "outputs")),
+    ("solver", "force and moment balance of the wafer (Newton), coupled with the pad deflection", ("equilibrium", "compliance")),
+    ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
     ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
