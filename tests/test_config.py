@@ -141,3 +141,9 @@ def test_a_config_file_may_start_from_a_preset(tmp_path):
 def test_a_particle_larger_than_the_roughness_allows_is_refused_by_name_before_solving(value):
     with pytest.raises(ValueError, match=r"particle_diameter .*(out of range|too large for pad_roughness).*valid range"):
         Config.default().replace(particle_diameter=value, pad_roughness="15 um")
+
+
+def test_the_paper_preset_holds_exactly_the_si_values_of_cmpsim_0_1():
+    """No round-off from unit parsing: identical configs must compare (and cache) equal."""
+    c = Config.paper()
+    assert (c.pad_modulus, c.pad_hardness, c.asperity_radius, c.pad_roughness, c.reference_roughness) == (100e6, 9.4e6, 50e-6, 15e-6, 15e-6)
