@@ -160,6 +160,8 @@ class WaferProblem:
         (``solver(A)`` returning an object with ``.solve(b)``, a sparse factorisation); default
         :func:`cmpsim.reynolds.factorize` (SuperLU).
 
+    Notes
+    -----
     Cost: the factorisation of the last matrix factorised is kept and later trial positions
     are solved by iterative refinement against it (:func:`cmpsim.reynolds.refine`), with a
     new factorisation only when the refinement stalls. ``factorizations`` counts the calls of

@@ -404,6 +404,8 @@ class ReynoldsSystem:
     stats : LinearSolveStats, optional
         Where to count factorisations and back-substitutions (a new one by default).
 
+    Notes
+    -----
     ``factorizations`` (0 or 1) says whether this system called the solver.
     """
 
