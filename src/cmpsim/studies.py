@@ -9,17 +9,18 @@ reproduction and calibration.
   study's own solve of the reference case (:func:`cmpsim.model.reference_config`), so that
   it is exactly 1 there.
 * :class:`Progress` is the progress bar of a study (rich, on stderr).
-* :func:`text_table` and :func:`markdown_table` are the tables of the reports.
+
+The tables of the reports are in :mod:`cmpsim.tables`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Sequence
+from typing import Any, Callable
 
 from .config import Config
 
-__all__ = ["Outcome", "diagnosis", "solve_point", "config_key", "PointCache", "Progress", "text_table", "markdown_table"]
+__all__ = ["Outcome", "diagnosis", "solve_point", "config_key", "PointCache", "Progress"]
 
 
 @dataclass
@@ -168,24 +169,3 @@ class Progress:
         self.failed += 0 if ok else 1
         if self._bar is not None:
             self._bar.update(self._task, advance=1, **self._fields())
-
-
-def text_table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
-    """A plain-text table: left-aligned columns under a header line."""
-    rows = [list(map(str, r)) for r in rows]
-    widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(header)]
-    line = "  ".join(h.ljust(w) for h, w in zip(header, widths))
-    out = [line, "-" * len(line)]
-    out += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
-    return "\n".join(out)
-
-
-def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
-    """A Markdown table (cells escaped: ``|`` as ``\\|``, newlines as spaces), ending with a newline."""
-
-    def cell(text) -> str:
-        return str(text).replace("|", "\\|").replace("\n", " ")
-
-    lines = ["| " + " | ".join(map(cell, header)) + " |", "|" + "---|" * len(header)]
-    lines += ["| " + " | ".join(map(cell, r)) + " |" for r in rows]
-    return "\n".join(lines) + "\n"

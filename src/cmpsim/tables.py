@@ -1,13 +1,16 @@
-"""Terminal tables that stay legible at 80 columns: names are never cut.
+"""Tables: terminal tables that stay legible at 80 columns, and the plain-text and Markdown
+tables of the study reports.
 
-The first column (names a user types) keeps its full width; on a narrow terminal the long
-free text (meaning, source) is stacked under the name instead of being squeezed into a
-column of its own, and the other long cells wrap.
+The first column of a terminal table (names a user types) keeps its full width; on a narrow
+terminal the long free text (meaning, source) is stacked under the name instead of being
+squeezed into a column of its own, and the other long cells wrap.
 """
 
 from __future__ import annotations
 
-__all__ = ["legible_table", "render_text", "WIDE"]
+from typing import Any, Iterable, Sequence
+
+__all__ = ["legible_table", "render_text", "WIDE", "text_table", "markdown_table"]
 
 #: Terminal width from which the long text gets a column of its own.
 WIDE = 110
@@ -57,3 +60,24 @@ def render_text(table, width: int = 80) -> str:
     buf = io.StringIO()
     Console(file=buf, width=width, color_system=None, force_terminal=False, highlight=False).print(table)
     return "\n".join(line.rstrip() for line in buf.getvalue().rstrip("\n").splitlines())
+
+
+def text_table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """A plain-text table: left-aligned columns under a header line."""
+    rows = [list(map(str, r)) for r in rows]
+    widths = [max([len(h)] + [len(r[i]) for r in rows]) for i, h in enumerate(header)]
+    line = "  ".join(h.ljust(w) for h, w in zip(header, widths))
+    out = [line, "-" * len(line)]
+    out += ["  ".join(c.ljust(w) for c, w in zip(r, widths)) for r in rows]
+    return "\n".join(out)
+
+
+def markdown_table(header: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """A Markdown table (cells escaped: ``|`` as ``\\|``, newlines as spaces), ending with a newline."""
+
+    def cell(text) -> str:
+        return str(text).replace("|", "\\|").replace("\n", " ")
+
+    lines = ["| " + " | ".join(map(cell, header)) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(map(cell, r)) + " |" for r in rows]
+    return "\n".join(lines) + "\n"

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..config import PARAMETERS, Config, format_display
-from ..studies import text_table
+from ..tables import text_table
 from ..validation import PointResult
 
 __all__ = ["CalibrationResult"]

@@ -15,7 +15,7 @@ import numpy as np
 from .. import units
 from .._version import __version__
 from ..config import Config
-from ..studies import markdown_table
+from ..tables import markdown_table
 from .checks import SIMILAR, SLIGHT, StatementResult
 from .paper import CURVES, LOADS_PSI, SPEEDS_RPM, FigureSpec, RunData
 
