@@ -3,7 +3,7 @@
 Solve one operating point, read its scalar outputs (SI units), and draw and save the wafer
 maps of every field. Inputs take units as strings (`"3 psi"`, `"75 rpm"`, `"150 nm"`), pint
 quantities, or plain numbers in SI; every input, its unit, valid range and source is listed by
-`cmpsim params` and in the [parameter table](../model.md#15-parameter-table).
+`cmpsim params` and in the [parameter table](../model.md#14-parameter-table).
 
 The same run from the command line writes the maps, the removal profile, the fields and
 scalars (CF NetCDF), the result (JSON) and the full input set (TOML) to one folder:
