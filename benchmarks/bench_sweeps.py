@@ -1,6 +1,7 @@
 """Throughput of `cmpsim.sweep`: serial vs 2 local Dask workers, and warm vs cold Newton starts.
 
 Run: python benchmarks/bench_sweeps.py [--grid default] [--pressures 8] [--speeds 8] [--repeat 3]
+     python benchmarks/bench_sweeps.py --workers-only --pressures 5 --speeds 8   # 40 points, 1 vs 2 workers
 
 The same sweep (applied_pressure x rotation_speed, LEP model, and the same for the
 hydrodynamic model where the cold start is expensive) is timed
@@ -9,7 +10,14 @@ hydrodynamic model where the cold start is expensive) is timed
   worker processes (created once; the cluster start-up is reported separately, and included
   in the end-to-end figure that ``cmpsim sweep --workers 2`` sees);
 * with and without the warm start (serial), counting Newton iterations and pressure solves
-  (sparse LU factorisations).
+  (sparse LU factorisations);
+* on a ``LocalCluster`` of 1 worker against one of 2 (both started before timing, runs
+  alternating): the parallel speed-up proper, without the difference between the calling
+  process and a worker. It also reports the CPU seconds the workers spent (their own
+  ``process_time``, summed) against the wall time, to say where a shortfall from 2x goes:
+  to the solves themselves (CPU seconds grow with 2 workers: the 2 cores are shared with
+  other jobs, or memory bandwidth), to idle workers at the end (chains of unequal cost), or
+  to the scheduler (per-task overhead).
 
 Every configuration is run once untimed first (imports, the cached reference solve of
 ``removal_rate_relative``), then ``--repeat`` times; the best time is kept. Ratios are the
@@ -50,6 +58,61 @@ def timed(fn, repeat: int):
     return best, out
 
 
+def _worker_cpu(client) -> float:
+    """CPU seconds used so far by the worker processes (summed)."""
+    import time as _t
+
+    return float(sum(client.run(_t.process_time).values()))
+
+
+def one_vs_two_workers(spec, repeat: int) -> dict:
+    """Sweep time on a 1-worker and a 2-worker LocalCluster (alternating, best of ``repeat``)."""
+    from distributed import Client
+
+    from cmpsim.sweeps import local_cluster, sweep
+
+    clusters = {n: local_cluster(n) for n in (1, 2)}
+    clients = {n: Client(c) for n, c in clusters.items()}
+    out = {n: {"wall_s": float("inf")} for n in clusters}
+    try:
+        for n, c in clients.items():
+            sweep(spec, scheduler=c, progress=False)  # warm-up: imports, reference case
+        for _ in range(repeat):
+            for n, c in clients.items():
+                cpu0 = _worker_cpu(c)
+                t = time.perf_counter()
+                ds = sweep(spec, scheduler=c, progress=False)
+                wall = time.perf_counter() - t
+                if wall < out[n]["wall_s"]:
+                    out[n] = {"wall_s": wall, "worker_cpu_s": _worker_cpu(c) - cpu0, "dataset": ds}
+    finally:
+        for c in clients.values():
+            c.close()
+        for c in clusters.values():
+            c.close()
+    return out
+
+
+def report_workers(spec, repeat: int, report: dict) -> None:
+    n = spec.n_points
+    res = one_vs_two_workers(spec, repeat)
+    one, two = res[1], res[2]
+    speedup = one["wall_s"] / two["wall_s"]
+    print(f"LocalCluster 1 worker vs 2 workers, {n} points (best of {repeat}, alternating):")
+    print(f"  1 worker:  {one['wall_s']:.2f} s wall, workers' CPU {one['worker_cpu_s']:.2f} s")
+    print(f"  2 workers: {two['wall_s']:.2f} s wall, workers' CPU {two['worker_cpu_s']:.2f} s")
+    print(f"  speed-up 2 / 1 workers: {speedup:.2f} x (goal >= 1.8 x)")
+    cpu_growth = two["worker_cpu_s"] / one["worker_cpu_s"]
+    idle = 1.0 - two["worker_cpu_s"] / (2.0 * two["wall_s"])
+    print(f"  where the rest goes: CPU per sweep x{cpu_growth:.2f} with 2 workers (shared cores / memory), "
+          f"workers idle or in the scheduler {100 * idle:.0f} % of 2 x wall")
+    print(f"  datasets identical: {one['dataset'].identical(two['dataset'])}")
+    report["one_vs_two_workers"] = dict(
+        points=n, one_worker_s=one["wall_s"], two_workers_s=two["wall_s"], speedup=speedup,
+        one_worker_cpu_s=one["worker_cpu_s"], two_workers_cpu_s=two["worker_cpu_s"], idle_fraction=idle,
+    )
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--grid", default="default")
@@ -57,7 +120,18 @@ def main() -> None:
     ap.add_argument("--speeds", type=int, default=8)
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--json", dest="json_path", help="also write the numbers to this JSON file")
+    ap.add_argument("--workers-only", action="store_true", help="only the 1-worker vs 2-worker LocalCluster comparison")
     args = ap.parse_args()
+    if args.workers_only:
+        spec = make_spec(args.grid, "lep", args.pressures, args.speeds)
+        print(f"sweep: {spec.n_points} points, grid {args.grid}, LEP; load average before: {os.getloadavg()[0]:.2f}")
+        report: dict = {"grid": args.grid, "load_before": os.getloadavg()[0]}
+        report_workers(spec, args.repeat, report)
+        print(f"load average after: {os.getloadavg()[0]:.2f}")
+        if args.json_path:
+            with open(args.json_path, "w") as f:
+                json.dump(report, f, indent=2)
+        return
 
     from distributed import Client
 
@@ -134,6 +208,7 @@ def main() -> None:
             factorizations_cold=fa_c,
             max_rel_film_change=dev,
         )
+    report_workers(spec, args.repeat, report)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
     report["load_after"] = os.getloadavg()[0]
     if args.json_path:

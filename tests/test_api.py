@@ -100,13 +100,11 @@ def test_provenance_names_model_version_and_every_parameter_with_its_source():
 
 
 def test_summary_lists_every_scalar_with_its_display_unit():
-    import re
-
     from cmpsim.result import SCALARS
 
     r = cmpsim.solve(grid="coarse")
-    # a box table: "│ name │ value │ unit │", the meaning wrapped on the lines below the name
-    rows = [[c.strip() for c in re.split(r"[│┃]", ln)[1:-1]] for ln in r.summary().splitlines()]
+    # plain text: "name   value  unit" on one line, the meaning wrapped on the lines below the name
+    rows = [ln.split() for ln in r.summary().splitlines()]
     for key in r.scalars:
         (row,) = [c for c in rows if c and c[0] == key]
         name, value, unit = row

@@ -171,14 +171,16 @@ def test_the_shipped_json_schema_is_generated_from_the_registry_and_the_output_v
 
 def test_schema_1_is_the_0_1_object_unchanged():
     # cmpsim 0.1 printed the reference file on its defaults, i.e. the paper's model: the paper
-    # preset must give the very same object (names, key order, types and numbers)
+    # preset must give the very same object (names, key order, types and numbers). The solver's
+    # cost (iterations, LU factorisations) and its round-off residuals are not results: the
+    # speed work of issue 15 solves the same discrete problem with fewer of them.
     ref = json.loads((DATA / "schema1_coarse_v0_1.json").read_text())
     paper = cmpsim.Config.paper().replace(grid="coarse")
     for got, want in ((cmpsim.solve(paper).to_schema1(), ref["plain"]), (cmpsim.solve(paper, check_roots=True).to_schema1(), ref["check_roots"])):
         assert list(got) == list(want)
         for k, v in want.items():
             assert type(got[k]) is type(v), k
-            if k not in ("load_residual", "moment_residual"):
+            if k not in ("load_residual", "moment_residual", "iterations", "factorizations"):
                 assert got[k] == pytest.approx(v, rel=1e-8, abs=1e-8 * abs(want["attack_angle_rad"]) if k == "cross_tilt_rad" else 0.0), k
 
 

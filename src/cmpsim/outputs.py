@@ -136,7 +136,7 @@ _OUTPUT_LIST = [
     _O("normal_stress_mean", "value", "Pa", "wafer-mean normal stress of the removal law: contact pressure plus the slurry pressure (granular: absolute, ambient p0 included)", "kPa", 1e-3, "wafer_mean", ("normal_stress",), schema1="mean_normal_stress_pa"),
     _O("shear_stress_mean", "value", "Pa", "wafer-mean shear stress magnitude tau on the wafer", "kPa", 1e-3, "wafer_mean", ("shear_stress",), schema1="mean_shear_stress_pa"),
     _O("removal_rate_mean", "value", "m s-1", "wafer-mean removal rate", "nm/min", 6e10, "wafer_mean", ("removal_rate",), schema1="removal_rate"),
-    _O("removal_rate_relative", "value", "1", "wafer-mean removal rate / that of the reference case (LEP, 100 nm, 15 um, 4 psi, 60 rpm)", "1", 1.0, "reference_ratio", ("removal_rate_mean",), schema1="removal_rate_relative", optional=True),
+    _O("removal_rate_relative", "value", "1", "wafer-mean removal rate / that of the reference case (LEP, 100 nm, sigma = reference_roughness: 15 um in the paper preset, 4 psi, 60 rpm)", "1", 1.0, "reference_ratio", ("removal_rate_mean",), schema1="removal_rate_relative", optional=True),
     _O("ambient_pressure", "value", "Pa", "slurry pressure at the wafer edge: granular p0 (0 gauge for a Newtonian slurry)", "kPa", 1e-3, "setup", schema1="ambient_pressure_pa"),
     _O("sliding_speed", "value", "m s-1", "relative sliding speed at the wafer centre", "m/s", 1.0, "setup", schema1="sliding_speed_m_s"),
     _O("within_wafer_nonuniformity", "value", "1", "within-wafer non-uniformity of the removal rate: 1-sigma / mean of removal_rate_profile, edge excluded", "%", 100.0, "profile_std_over_mean", ("removal_rate_profile",)),

@@ -52,6 +52,9 @@ __all__ = [
     "face_fluxes",
     "flux_divergence",
     "ReynoldsSystem",
+    "LinearSolveStats",
+    "refine",
+    "assembly_map",
     "factorize",
 ]
 
@@ -119,7 +122,7 @@ class FaceCoefficients:
     n_faces: int = 0
 
 
-def lubrication_coefficients(h, x, y, params: LubricationParameters):
+def lubrication_coefficients(h, x, y, params: LubricationParameters, velocities=None):
     """Reynolds coefficients at points (x, y) with film thickness h (all m).
 
     Returns ``(dxx, dxy, dyy, qx, qy, floored)``: the diffusion tensor D with the regularised
@@ -127,7 +130,8 @@ def lubrication_coefficients(h, x, y, params: LubricationParameters):
     (m^2/s, eq. 11–13) and the boolean mask of regularised points. For the granular slurry
     D = (1/6)(t/a) v Psi h^2 Phi^p (m^3/s, multiplies grad ln p); for the Newtonian slurry
     D = h^3/(12 eta) Phi^p (m^4/(Pa s), multiplies grad p) with f = g = 3 in the flow factors.
-    Raises ValueError if any film thickness is not finite and > 0.
+    ``velocities``, if given, is ``params.kinematics.mean_and_relative(x, y)`` computed before
+    (it depends on the points only). Raises ValueError if any film thickness is not finite and > 0.
     """
     h = np.asarray(h, dtype=float)
     if not np.all(np.isfinite(h)) or np.any(h <= 0):
@@ -145,7 +149,7 @@ def lubrication_coefficients(h, x, y, params: LubricationParameters):
     else:
         c = params.t_over_a * params.fluctuation_velocity * psi * h * h / 6.0
     sxx, sxy, syy = shear_flow_factors(hs, f, rough)
-    umx, umy, dux, duy = params.kinematics.mean_and_relative(x, y)
+    umx, umy, dux, duy = params.kinematics.mean_and_relative(x, y) if velocities is None else velocities
     half_sigma = 0.5 * rough.sigma
     qx = umx * h + half_sigma * (sxx * dux + sxy * duy)
     qy = umy * h + half_sigma * (sxy * dux + syy * duy)
@@ -161,84 +165,123 @@ def _polar_components(dxx, dxy, dyy, theta_n):
     return d_nn, d_nt
 
 
-def assemble_operator(grid: PolarGrid, coeffs: FaceCoefficients) -> sp.csr_matrix:
-    """Matrix A with (A phi)_P = sum over faces of P of the outward flux -D grad(phi) . n L.
+def _operator_entries(grid: PolarGrid):
+    """The operator's entries as linear functions of the polar tensor components on the faces.
 
-    For a symmetric positive-definite D it is an M-matrix (without cross terms), singular
-    only without the Dirichlet edge. Units: m^3/s (flux per unit phi).
+    Returns ``(rows, cols, src, weight)``: entry k adds ``weight[k] * c[src[k]]`` to
+    ``A[rows[k], cols[k]]``, where ``c`` stacks, each flattened like the grid, D_rr and D_rt
+    on the radial faces and D_tt and D_tr on the angular ones (4 N values). Geometry only.
     """
-    n_r, n_t, dr, dth = grid.n_r, grid.n_theta, grid.dr, grid.dtheta
-    rows, cols, vals = [], [], []
+    n_r, n_t, dr, dth, N = grid.n_r, grid.n_theta, grid.dr, grid.dtheta, grid.size
+    rows, cols, src, wts = [], [], [], []
     i = np.arange(n_r)[:, None] * np.ones((1, n_t), dtype=int)
     j = np.arange(n_t)[None, :] * np.ones((n_r, 1), dtype=int)
     P = grid.index(i, j)
 
-    def add(p, n, col, w):
-        rows.append(p.ravel())
-        cols.append(col.ravel())
-        vals.append(w.ravel())
-        if n is not None:
-            rows.append(n.ravel())
+    def add(p, n, col, s, w):
+        # +w c[s] in row p, -w c[s] in row n (the flux leaves p and enters n), column col
+        for row, sign in ((p, 1.0), (n, -1.0)):
+            if row is None:
+                continue
+            rows.append(row.ravel())
             cols.append(col.ravel())
-            vals.append(-w.ravel())
+            src.append(s.ravel())
+            wts.append(sign * np.broadcast_to(w, row.shape).ravel())
 
-    # ---- radial faces (outer face of each cell) ----
-    dxx, dxy, dyy = coeffs.radial[:3]
+    # ---- radial faces (outer face of each cell): c[0:N] = D_rr, c[N:2N] = D_rt
     _, _, length = grid.radial_faces
-    d_rr, d_rt = _polar_components(dxx, dxy, dyy, grid.theta)
     rf = (i + 1.0) * dr
     interior = i < n_r - 1
     Pi, Ni = P[interior], grid.index(i[interior] + 1, j[interior])
-    Li, drr, drt = length[interior], d_rr[interior], d_rt[interior]
-    add(Pi, Ni, Ni, -drr / dr * Li)
-    add(Pi, Ni, Pi, drr / dr * Li)
+    Li = length[interior]
+    add(Pi, Ni, Ni, Pi, -Li / dr)
+    add(Pi, Ni, Pi, Pi, Li / dr)
     ii, jj = i[interior], j[interior]
-    wt = -drt * Li / (4.0 * dth * rf[interior])
+    wt = -Li / (4.0 * dth * rf[interior])
     for di in (0, 1):
-        add(Pi, Ni, grid.index(ii + di, jj + 1), wt)
-        add(Pi, Ni, grid.index(ii + di, jj - 1), -wt)
+        add(Pi, Ni, grid.index(ii + di, jj + 1), Pi + N, wt)
+        add(Pi, Ni, grid.index(ii + di, jj - 1), Pi + N, -wt)
     edge = ~interior
     Pe = P[edge]
-    add(Pe, None, Pe, d_rr[edge] * length[edge] / (0.5 * dr))
+    add(Pe, None, Pe, Pe, length[edge] / (0.5 * dr))
 
-    # ---- angular faces (counter-clockwise face of each cell) ----
-    dxx, dxy, dyy = coeffs.angular[:3]
-    theta_f = (j + 1.0) * dth
-    d_tt, d_tr = _polar_components(dxx, dxy, dyy, theta_f + 0.5 * np.pi)
-    # D_tr with n = e_theta, t = -e_r: flip sign to get e_theta . D . e_r
-    d_tr = -d_tr
+    # ---- angular faces (counter-clockwise face of each cell): c[2N:3N] = D_tt, c[3N:4N] = D_tr
     La = np.full(P.shape, dr)
-    N = grid.index(i, j + 1)
+    Nb = grid.index(i, j + 1)
     r_c = (i + 0.5) * dr
-    add(P, N, N, -d_tt / (r_c * dth) * La)
-    add(P, N, P, d_tt / (r_c * dth) * La)
+    add(P, Nb, Nb, P + 2 * N, -La / (r_c * dth))
+    add(P, Nb, P, P + 2 * N, La / (r_c * dth))
     (ca, wa), (cb, wb) = grid.radial_derivative_stencil
     for jj_shift in (0, 1):
         sel = np.roll(np.arange(n_t), -jj_shift)  # cell (i, j + shift)
         for c_arr, w_arr in ((ca, wa), (cb, wb)):
-            add(P, N, c_arr[:, sel], -0.5 * d_tr * w_arr[:, sel] * La)
-
-    return _to_csr(grid, rows, cols, np.concatenate(vals))
-
-
-_PATTERNS: dict = {}
+            add(P, Nb, c_arr[:, sel], P + 3 * N, -0.5 * w_arr[:, sel] * La)
+    return (np.concatenate(rows), np.concatenate(cols), np.concatenate(src), np.concatenate(wts))
 
 
-def _to_csr(grid: PolarGrid, rows, cols, vals) -> sp.csr_matrix:
-    """Sum the COO entries into CSR; the pattern depends on the grid only and is cached."""
-    pattern = _PATTERNS.get(grid)
-    if pattern is None or pattern[0] != len(vals):
-        r = np.concatenate(rows)
-        c = np.concatenate(cols)
-        keys, inverse = np.unique(r.astype(np.int64) * grid.size + c, return_inverse=True)
-        indptr = np.searchsorted(keys // grid.size, np.arange(grid.size + 1))
-        pattern = (len(vals), inverse, (keys % grid.size).astype(np.int32), indptr.astype(np.int32), len(keys))
-        if len(_PATTERNS) > 16:
-            _PATTERNS.clear()
-        _PATTERNS[grid] = pattern
-    _, inverse, indices, indptr, nnz = pattern
-    data = np.bincount(inverse, weights=vals, minlength=nnz)
-    return sp.csr_matrix((data, indices.copy(), indptr.copy()), shape=(grid.size, grid.size))
+@dataclass(frozen=True)
+class _AssemblyMap:
+    """Precomputed map from the stacked polar components (4 N) to the CSR data of the operator."""
+
+    to_data: sp.csr_matrix  # (nnz, 4 N)
+    indices: np.ndarray
+    indptr: np.ndarray
+    cos_r: np.ndarray  # direction cosines of the radial-face normals (theta_j)
+    sin_r: np.ndarray
+    cos_a: np.ndarray  # of the angular-face normals (theta_{j+1/2} + pi/2)
+    sin_a: np.ndarray
+
+
+_MAPS: dict = {}
+
+
+def assembly_map(grid: PolarGrid) -> _AssemblyMap:
+    """The :class:`_AssemblyMap` of a grid (built once per grid, vectorised, and cached)."""
+    amap = _MAPS.get(grid)
+    if amap is not None:
+        return amap
+    N = grid.size
+    rows, cols, src, wts = _operator_entries(grid)
+    keys, inverse = np.unique(rows.astype(np.int64) * N + cols, return_inverse=True)
+    indptr = np.searchsorted(keys // N, np.arange(N + 1)).astype(np.int32)
+    to_data = sp.csr_matrix((wts, (inverse.ravel(), src)), shape=(len(keys), 4 * N))
+    to_data.sum_duplicates()
+    theta = np.broadcast_to(grid.theta, (grid.n_r, grid.n_theta))
+    theta_f = np.broadcast_to((np.arange(grid.n_theta) + 1.0)[None, :] * grid.dtheta + 0.5 * np.pi, theta.shape)
+    amap = _AssemblyMap(
+        to_data, (keys % N).astype(np.int32), indptr, np.cos(theta), np.sin(theta), np.cos(theta_f), np.sin(theta_f)
+    )
+    if len(_MAPS) > 16:
+        _MAPS.clear()
+    _MAPS[grid] = amap
+    return amap
+
+
+def _stacked_components(amap: _AssemblyMap, coeffs: FaceCoefficients) -> np.ndarray:
+    c, s = amap.cos_r, amap.sin_r
+    dxx, dxy, dyy = coeffs.radial[:3]
+    d_rr = c * c * dxx + 2.0 * s * c * dxy + s * s * dyy
+    d_rt = -s * c * dxx + (c * c - s * s) * dxy + s * c * dyy
+    c, s = amap.cos_a, amap.sin_a
+    dxx, dxy, dyy = coeffs.angular[:3]
+    d_tt = c * c * dxx + 2.0 * s * c * dxy + s * s * dyy
+    # D_tr with n = e_theta, t = -e_r: the sign flip gives e_theta . D . e_r
+    d_tr = -(-s * c * dxx + (c * c - s * s) * dxy + s * c * dyy)
+    return np.concatenate([d_rr.ravel(), d_rt.ravel(), d_tt.ravel(), d_tr.ravel()])
+
+
+def assemble_operator(grid: PolarGrid, coeffs: FaceCoefficients) -> sp.csr_matrix:
+    """Matrix A with (A phi)_P = sum over faces of P of the outward flux -D grad(phi) . n L.
+
+    For a symmetric positive-definite D it is an M-matrix (without cross terms), singular
+    only without the Dirichlet edge. Units: m^3/s (flux per unit phi). The entries are a
+    linear map of the face tensors, precomputed once per grid (:func:`assembly_map`): one
+    sparse mat-vec per assembly.
+    """
+    amap = assembly_map(grid)
+    data = amap.to_data @ _stacked_components(amap, coeffs)
+    N = grid.size
+    return sp.csr_matrix((data, amap.indices, amap.indptr), shape=(N, N), copy=False)
 
 
 def face_fluxes(grid: PolarGrid, coeffs: FaceCoefficients) -> tuple[np.ndarray, np.ndarray]:
@@ -281,6 +324,67 @@ def factorize(A: sp.spmatrix):
     return spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A")
 
 
+class LinearSolveStats:
+    """Counts of the sparse work: ``factorizations`` (real ``splu`` calls), ``back_substitutions``."""
+
+    def __init__(self):
+        self.factorizations = 0
+        self.back_substitutions = 0
+        self.last_refinement = 0  # back-substitutions of the last call of refine()
+
+
+#: Iterative refinement against another matrix's factorisation stops when the correction is
+#: below this times the largest |phi| (the fresh-LU answer is reproduced to round-off) ...
+REFINE_RTOL = 1e-13
+#: ... and is abandoned for a fresh factorisation when it has not got there in this many
+#: back-substitutions, or when successive corrections shrink by less than this factor.
+REFINE_MAX = 10
+REFINE_CONTRACTION = 0.5
+#: Corrections that stop shrinking below this times max |phi| are round-off: converged.
+REFINE_STAGNATION = 1e-12
+
+
+def refine(matrix, factor, rhs, x0=None, rtol: float = REFINE_RTOL, max_iter: int = REFINE_MAX, stats=None):
+    """Solve ``matrix @ x = rhs`` by iterative refinement with the factorisation of a nearby matrix.
+
+    x_{k+1} = x_k + F^-1 (rhs - matrix x_k), with F = ``factor`` (any object with ``.solve``);
+    ``rhs`` may hold several columns (each is judged on its own scale). Returns x, or None if
+    the corrections do not shrink below ``rtol * max|x|`` within ``max_iter`` corrections at a
+    rate of at least ``REFINE_CONTRACTION`` (then the caller factorises ``matrix`` itself).
+    Corrections that stagnate below ``REFINE_STAGNATION * max|x|`` are round-off: converged.
+    ``stats.back_substitutions`` counts one per solve call (all columns at once).
+    """
+    x = np.asarray(factor.solve(rhs)) if x0 is None else np.array(x0, dtype=float)
+    n_solves = 1 if x0 is None else 0
+    prev = np.inf
+    ok = False
+    for _ in range(max_iter):
+        dx = np.asarray(factor.solve(rhs - matrix @ x))
+        n_solves += 1
+        x += dx
+        # largest correction relative to its own column's scale
+        size = float(np.max(np.max(np.abs(dx), axis=0) / np.maximum(np.max(np.abs(x), axis=0), 1e-300)))
+        if not np.isfinite(size):
+            break
+        if size <= rtol:
+            ok = True
+            break
+        if size < prev and np.isfinite(prev):
+            # at this rate, would it converge in the corrections left?
+            needed = np.log(rtol / size) / np.log(size / prev)
+            if needed > max_iter - n_solves + 1 and size > REFINE_STAGNATION:
+                break
+        if size > REFINE_CONTRACTION * prev:
+            # stagnation at round-off (what a fresh factorisation would leave too): converged
+            ok = prev <= REFINE_STAGNATION
+            break
+        prev = size
+    if stats is not None:
+        stats.back_substitutions += n_solves
+        stats.last_refinement = n_solves
+    return x if ok else None
+
+
 class ReynoldsSystem:
     """The discrete Reynolds problem A(h) phi = b(h) on a grid, for given face coefficients.
 
@@ -293,9 +397,19 @@ class ReynoldsSystem:
         manufactured-solution tests.
     solver : callable, optional
         ``solver(A)`` returning an object with ``.solve(b)``; default :func:`factorize`.
+    reference : object with ``.solve(b)``, optional
+        Factorisation of a nearby matrix (e.g. that of the previous trial position). Solves
+        then use iterative refinement against it (:func:`refine`) and factorise this system's
+        own matrix only if the refinement stalls: the answer is the same to round-off.
+    stats : LinearSolveStats, optional
+        Where to count factorisations and back-substitutions (a new one by default).
+
+    Notes
+    -----
+    ``factorizations`` (0 or 1) says whether this system called the solver.
     """
 
-    def __init__(self, grid: PolarGrid, coeffs: FaceCoefficients, source=None, solver=None):
+    def __init__(self, grid: PolarGrid, coeffs: FaceCoefficients, source=None, solver=None, reference=None, stats=None):
         self.grid = grid
         self.coeffs = coeffs
         self.matrix = assemble_operator(grid, coeffs)
@@ -305,17 +419,43 @@ class ReynoldsSystem:
         self.rhs = rhs
         self._solver = solver or factorize
         self._factor = None
+        self.reference = reference
+        self.stats = stats if stats is not None else LinearSolveStats()
+        self.factorizations = 0
+        self.refinement_steps = 0  # back-substitutions of the last solve by refinement (0: none)
 
     @property
     def factor(self):
         """The factorisation of the matrix (computed once, on first use)."""
         if self._factor is None:
             self._factor = self._solver(self.matrix)
+            self.factorizations += 1
+            self.stats.factorizations += 1
         return self._factor
+
+    @property
+    def own_factor(self):
+        """This matrix's own factorisation if one was computed, else None."""
+        return self._factor
+
+    def solve_linear(self, rhs, x0=None, rtol: float = REFINE_RTOL) -> np.ndarray:
+        """x with ``matrix @ x = rhs`` (flat, or columns (N, k)): refinement against the reference if any
+        (to ``rtol`` relative, see :func:`refine`), else this matrix's own factorisation."""
+        rhs = np.asarray(rhs, dtype=float)
+        if rhs.ndim == 1 or rhs.shape[0] != self.grid.size:
+            rhs = rhs.ravel()
+        if self._factor is None and self.reference is not None:
+            x = refine(self.matrix, self.reference, rhs, x0=x0, rtol=rtol, stats=self.stats)
+            self.refinement_steps = self.stats.last_refinement
+            if x is not None:
+                return x
+        x = np.asarray(self.factor.solve(rhs))
+        self.stats.back_substitutions += 1
+        return x
 
     def solve(self) -> np.ndarray:
         """phi at the cell centres, shape (n_r, n_theta)."""
-        phi = self.factor.solve(self.rhs)
+        phi = self.solve_linear(self.rhs)
         return np.asarray(phi).reshape(self.grid.n_r, self.grid.n_theta)
 
     def residual(self, phi) -> np.ndarray:

@@ -1,0 +1,127 @@
+"""Behaviour behind the speed-ups of issue 15 (the speed itself is measured in benchmarks/).
+
+- iterative refinement against another position's LU gives the fresh-LU pressure to round-off;
+- one equilibrium costs at most 2 factorisations on average, and ``factorizations`` counts
+  real calls of the solver (``WaferProblem(solver=...)`` is used for every pressure solve);
+- the one-evaluation Jacobian (dc/dh times the geometric dh/du) is the derivative of the
+  residuals;
+- the coarse-grid warm start converges to the position of the cold start;
+- the per-grid assembly map gives the matrix of the entries it was built from.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import cmpsim
+from cmpsim.config import Config
+from cmpsim.equilibrium import solve_equilibrium
+from cmpsim.reynolds import (
+    LinearSolveStats,
+    ReynoldsSystem,
+    _operator_entries,
+    assemble_operator,
+    assembly_map,
+    factorize,
+    refine,
+)
+from cmpsim.setup import build_problem
+
+
+def _problem(**settings):
+    return build_problem(Config.paper().replace(**settings))
+
+
+@pytest.mark.parametrize("settings", [{}, {"grid": "48x128"}, {"slurry_model": "newtonian"}])
+@pytest.mark.parametrize("du", [(0.005, 0.0, 0.0), (0.0, 1e-6, 0.0), (1e-6, 0.0, 1e-7)])
+def test_refinement_against_a_neighbours_lu_gives_the_fresh_lu_pressure(settings, du):
+    pr = _problem(**settings)
+    u = pr.contact_only_start()
+    near = ReynoldsSystem(pr.grid, pr.face_coefficients(u))
+    near.solve()
+    v = u + np.asarray(du) * np.array([pr.sigma, 1.0, 1.0])
+    coeffs = pr.face_coefficients(v)
+    fresh = ReynoldsSystem(pr.grid, coeffs).solve()
+    stats = LinearSolveStats()
+    refined = ReynoldsSystem(pr.grid, coeffs, reference=near.factor, stats=stats)
+    phi = refined.solve()
+    assert stats.factorizations == 0 and refined.own_factor is None  # no new LU was needed
+    assert np.max(np.abs(phi - fresh)) <= 1e-12 * np.max(np.abs(fresh))
+
+
+def test_refinement_gives_up_on_a_distant_matrix_and_the_system_factorises():
+    pr = _problem()
+    u = pr.contact_only_start()
+    far = ReynoldsSystem(pr.grid, pr.face_coefficients(u + np.array([3.0 * pr.sigma, 0.0, 0.0])))
+    coeffs = pr.face_coefficients(u)
+    A = assemble_operator(pr.grid, coeffs)
+    stats = LinearSolveStats()
+    assert refine(A, far.factor, np.ones(pr.grid.size), stats=stats) is None
+    assert stats.back_substitutions <= 16
+    system = ReynoldsSystem(pr.grid, coeffs, reference=far.factor, stats=stats)
+    phi = system.solve()
+    assert stats.factorizations == 1 and system.own_factor is not None
+    np.testing.assert_allclose(phi, ReynoldsSystem(pr.grid, coeffs).solve(), rtol=0, atol=1e-13 * np.abs(phi).max())
+
+
+def test_an_equilibrium_costs_at_most_two_factorisations_on_average():
+    cases = [{}, {"model": "elastic"}, {"applied_pressure": "2 psi"}, {"rotation_speed": "90 rpm"}, {"particle_diameter": "200 nm", "pad_roughness": "20 um"}]
+    counts = [int(cmpsim.solve(Config.paper().replace(**c), relative=False).scalars["factorizations"]) for c in cases]
+    assert np.mean(counts) <= 2.0, counts
+
+
+def test_factorizations_counts_the_calls_of_the_injected_solver():
+    calls = []
+
+    def solver(A):
+        calls.append(A.shape)
+        return factorize(A)
+
+    cfg = Config.paper()
+    base = build_problem(cfg)
+    from cmpsim.equilibrium import WaferProblem
+
+    pr = WaferProblem(base.grid, solver=solver, **base._init_args)
+    sol = solve_equilibrium(pr)
+    assert len(calls) == sol.factorizations >= 1
+    assert sol.back_substitutions > sol.factorizations
+    ref = solve_equilibrium(build_problem(cfg))
+    np.testing.assert_allclose(sol.state.u, ref.state.u, rtol=1e-12)
+
+
+@pytest.mark.parametrize("settings", [{}, {"model": "hydrodynamic"}, {"slurry_model": "newtonian", "cavitation": "gumbel", "cavitation_pressure": "-20 kPa"}])
+def test_one_evaluation_jacobian_is_the_derivative_of_the_residuals(settings):
+    pr = _problem(**settings)
+    sol = solve_equilibrium(pr)
+    st = sol.state
+    J = pr.jacobian(st)
+    for k in range(3):
+        du = np.zeros(3)
+        du[k] = 1e-5 * pr.u_scale[k]
+        fd = (pr.state(st.u + du).residual - pr.state(st.u - du).residual) / (2 * du[k])
+        scale = np.max(np.abs(J[:, k]))
+        np.testing.assert_allclose(J[:, k], fd, rtol=0, atol=2e-4 * scale)
+
+
+@pytest.mark.parametrize("settings", [{"model": "hydrodynamic"}, {"grid": "48x128"}])
+def test_coarse_grid_warm_start_converges_to_the_cold_start_position(settings):
+    cold = solve_equilibrium(_problem(**settings), warm_start=False).state.u
+    warm = solve_equilibrium(_problem(**settings), warm_start=True).state.u
+    np.testing.assert_allclose(warm[:2], cold[:2], rtol=1e-8)
+    assert abs(warm[2] - cold[2]) <= 1e-8 * abs(cold[1])
+
+
+def test_assembly_map_sums_the_entries_it_was_built_from():
+    pr = _problem(grid="coarse")
+    coeffs = pr.face_coefficients(pr.contact_only_start())
+    rows, cols, src, w = _operator_entries(pr.grid)
+    amap = assembly_map(pr.grid)
+    from cmpsim.reynolds import _stacked_components
+
+    c = _stacked_components(amap, coeffs)
+    N = pr.grid.size
+    direct = sp.coo_matrix((w * c[src], (rows, cols)), shape=(N, N)).tocsr()
+    A = assemble_operator(pr.grid, coeffs)
+    assert abs(A - direct).max() <= 1e-14 * abs(direct).max()
