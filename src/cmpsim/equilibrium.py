@@ -105,6 +105,8 @@ class PressureState:
     # ---- pad compliance (compliance.py); None on a rigid pad
     deflection: np.ndarray | None = None  # pad deflection w at cell centres, m
     coupling: object = None  # (CoupledLinearisation, evaluation) for the Jacobian
+    # ---- set by the Jacobian of a linear (non-JFO) rigid-pad system: dphi/du, (cells, 3)
+    dphi_du: np.ndarray | None = None
 
     @property
     def p_total(self) -> np.ndarray:
@@ -332,15 +334,21 @@ class WaferProblem:
             return system
         return ReynoldsSystem(self.grid, coeffs, solver=self.solver, reference=self._reference, stats=self.linear)
 
-    def state(self, u) -> PressureState:
-        """Solve the Reynolds equation and evaluate contact and residuals at position u."""
+    def state(self, u, guess=None) -> PressureState:
+        """Solve the Reynolds equation and evaluate contact and residuals at position u.
+
+        ``guess`` (optional, flat, one value per cell) is where iterative refinement against
+        an earlier factorisation starts (see :func:`cmpsim.reynolds.refine`): a closer start
+        needs fewer back-substitutions, the converged phi is the same to round-off. It is
+        ignored where the solve does not refine (JFO, compliant pad, a fresh factorisation).
+        """
         if self.foundation is not None:  # film and pad deflection solved together (compliance.py)
             return compliance.coupled_state(self, u)
         u = np.asarray(u, dtype=float)
         h = self.film(u, self.xc, self.yc)
         coeffs = self.face_coefficients(u)
         system = self._system(coeffs)
-        phi = system.solve()
+        phi = system.solve(x0=guess) if isinstance(system, ReynoldsSystem) else system.solve()
         if isinstance(system, ReynoldsSystem) and system.own_factor is not None:
             self._reference = system.own_factor  # later positions refine against it
         if self.newtonian:
@@ -424,6 +432,7 @@ class WaferProblem:
             system.factor
             self._reference = system.own_factor
         dphis = -system.solve_linear(dr, rtol=JACOBIAN_RTOL)
+        st.dphi_du = dphis / np.array([du[k] for k, du in enumerate(steps)])
         # contact depends on the local film only: one evaluation gives its derivative in h
         if self.variant == "hydrodynamic":
             dpc = dar = 0.0
@@ -712,6 +721,8 @@ def solve_equilibrium(
     warm = start is not None
     if start is None and (_use_warm_start(problem) if warm_start is None else warm_start):
         start = _coarse_start(problem, max_iter, max_step)
+    if start is None and _use_coarse_step(problem) and warm_start is not False:
+        start = _coarse_first_step(problem, max_step)
     if start is None:
         try:
             start = problem.fluid_start() if problem.variant == "hydrodynamic" else problem.contact_only_start()
@@ -776,6 +787,46 @@ def _use_warm_start(problem: WaferProblem) -> bool:
     if problem.variant == "hydrodynamic":
         return problem.grid.size > WARM_START_GRIDS[0][0] * WARM_START_GRIDS[0][1]
     return problem.grid.size > _WARM_START_MIN_CELLS
+
+
+#: Grid of the first Newton step of a cold start (see :func:`_coarse_first_step`).
+FIRST_STEP_GRID = (8, 24)
+
+
+def _use_coarse_step(problem: WaferProblem) -> bool:
+    g = problem.grid
+    return (
+        problem.foundation is None
+        and problem.cavitation != "jfo"
+        and problem.variant != "hydrodynamic"
+        and g.size > 2 * FIRST_STEP_GRID[0] * FIRST_STEP_GRID[1]
+        and g.n_r >= FIRST_STEP_GRID[0]
+        and g.n_theta >= FIRST_STEP_GRID[1]
+    )
+
+
+def _coarse_first_step(problem: WaferProblem, max_step: float):
+    """The first Newton step of a cold start, taken on the coarse grid :data:`FIRST_STEP_GRID`:
+    the contact-only start and the Newton step from it (zero tilt to the tilt the moments
+    ask for) there, where a solve is cheap; None if that fails (the caller starts on its own
+    grid). The target grid then needs one factorisation less: its first matrix is already
+    near the equilibrium, and later positions refine against it."""
+    coarse = problem.on_grid(PolarGrid(problem.grid.radius, *FIRST_STEP_GRID))
+    try:
+        u = coarse.contact_only_start()
+        st = coarse.state(u)
+        step = -np.linalg.solve(coarse.jacobian(st), st.residual)
+    except (EquilibriumError, ValueError, np.linalg.LinAlgError):
+        return None
+    finally:
+        problem.factorizations += coarse.factorizations
+        problem.back_substitutions += coarse.back_substitutions
+    scaled = float(np.max(np.abs(step) / problem.u_scale))
+    if not np.isfinite(scaled):
+        return None
+    if scaled > max_step:
+        step *= max_step / scaled
+    return u + step
 
 
 def _coarse_start(problem: WaferProblem, max_iter: int, max_step: float):
@@ -856,8 +907,10 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
         reason = ""
         for _ in range(30):
             trial = u + alpha * step
+            # the linearised pressure at the trial position: where refinement starts
+            guess = None if st.dphi_du is None else st.phi.ravel() + st.dphi_du @ (alpha * step)
             try:
-                new = problem.state(trial)
+                new = problem.state(trial, guess=guess)
             except ValueError as exc:
                 reason = f" ({exc})"
                 alpha *= 0.5

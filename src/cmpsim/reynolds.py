@@ -453,9 +453,10 @@ class ReynoldsSystem:
         self.stats.back_substitutions += 1
         return x
 
-    def solve(self) -> np.ndarray:
-        """phi at the cell centres, shape (n_r, n_theta)."""
-        phi = self.solve_linear(self.rhs)
+    def solve(self, x0=None) -> np.ndarray:
+        """phi at the cell centres, shape (n_r, n_theta); ``x0`` (flat) starts the iterative
+        refinement, if any (see :meth:`solve_linear`)."""
+        phi = self.solve_linear(self.rhs, x0=x0)
         return np.asarray(phi).reshape(self.grid.n_r, self.grid.n_theta)
 
     def residual(self, phi) -> np.ndarray:

@@ -30,7 +30,7 @@ from .._version import __version__
 from ..config import Config
 from .checks import SIMILAR, SLIGHT, STATEMENTS, Statement, StatementResult, evaluate_statements
 from .paper import BASE_LOAD_PSI, BASE_SPEED_RPM, CURVES, FIGURES, LOADS_PSI, SPEEDS_RPM, Curve, FigureSpec, Point, RunData, _solve_all
-from .report import CSV_COLUMNS, FigureResult, ReproductionReport, _blocks, _csv_rows, _notes, _plot, _render_html, _render_md, _write_csv, _write_csv_trends
+from .report import CSV_COLUMNS, FigureResult, ReproductionReport, _blocks, _csv_rows, _notes, _plot, _plot_all, _render_html, _render_md, _write_csv, _write_csv_trends
 
 __all__ = [
     "reproduce",
@@ -76,7 +76,7 @@ def reproduce(out=None, grid: str | None = None, progress: bool = True, config: 
     if grid is not None:
         base = base.replace(grid=grid)
     data, n_eq, n_fact, failures, solve_s = _solve_all(base, progress)
-    figures = []
+    figures, plots = [], []
     for spec in FIGURES:
         rows = _csv_rows(spec, data)
         csv_path = out / f"{spec.name}.csv"
@@ -86,8 +86,9 @@ def reproduce(out=None, grid: str | None = None, progress: bool = True, config: 
             f"grid {base.numerics.grid}; other inputs: see REPORT.md (parameter set); SI unless the column name says otherwise",
         ]
         _write_csv(csv_path, rows, header)
-        _plot(spec, data, png_path)
+        plots.append((spec, data, png_path))
         figures.append(FigureResult(spec, png_path, csv_path, rows))
+    _plot_all(plots)
     statements = evaluate_statements(data)
     rep = ReproductionReport(
         out=out,

@@ -190,6 +190,51 @@ def _plot(spec: FigureSpec, data: RunData, path: Path) -> None:
     plt.close(fig)
 
 
+def _plot_all(jobs: list[tuple[FigureSpec, RunData, Path]], processes: int | None = None) -> None:
+    """Write the figures of ``jobs`` ((spec, data, png path) each), on two processes if the
+    machine has two cores: a forked child draws every second figure while this process draws
+    the others (matplotlib draws one figure on one core; the ten figures of ``cmpsim
+    reproduce`` took as long as its 102 equilibria). Without ``fork`` (not Linux), with one
+    core, for a single figure, or when this process runs other threads (forking them is not
+    safe), they are drawn here, one after the other.
+
+    Each PNG is written atomically (:func:`cmpsim.io.atomic_path`), so a failure leaves no
+    partial file; a failure in the child is raised here as a RuntimeError.
+    """
+    import multiprocessing
+    import os
+    import threading
+
+    if processes is None:
+        try:
+            processes = len(os.sched_getaffinity(0))
+        except AttributeError:  # pragma: no cover - macOS / Windows
+            processes = os.cpu_count() or 1
+    forkable = "fork" in multiprocessing.get_all_start_methods()
+    if processes < 2 or len(jobs) < 2 or not forkable or threading.active_count() > 1:
+        for job in jobs:
+            _plot(*job)
+        return
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    import matplotlib.pyplot  # noqa: F401  (imported once, before the fork: the child inherits it)
+
+    child = multiprocessing.get_context("fork").Process(target=_plot_jobs, args=(jobs[1::2],), name="cmpsim-figures")
+    child.start()
+    try:
+        _plot_jobs(jobs[0::2])
+    finally:
+        child.join()
+    if child.exitcode != 0:
+        raise RuntimeError(f"drawing the figures failed in the child process (exit code {child.exitcode}; its traceback is above)")
+
+
+def _plot_jobs(jobs) -> None:
+    for job in jobs:
+        _plot(*job)
+
+
 # --------------------------------------------------------------------------- report
 def _blocks(rep: ReproductionReport, command: str) -> list[tuple]:
     """The report as blocks: ("h", level, text) ("p", text) ("table", header, rows) ("img", png, caption, csv) ("ul", items)."""
