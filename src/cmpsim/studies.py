@@ -18,9 +18,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
+import numpy as np
+
 from .config import Config
 
-__all__ = ["Outcome", "diagnosis", "solve_point", "config_key", "PointCache", "Progress"]
+__all__ = ["Outcome", "diagnosis", "solve_point", "config_key", "PointCache", "Progress", "predict_start"]
 
 
 @dataclass
@@ -78,6 +80,56 @@ def solve_point(config: Config, start=None, relative: bool = False, problem=None
         return Outcome(None, "cold-retry", diagnosis(exc))
 
 
+def _solved(rec) -> bool:
+    return isinstance(rec, dict) and rec.get("status") == "ok" and rec.get("u") is not None
+
+
+def predict_start(cfg: Config, problem, x: float | None, prev, prev2):
+    """Newton start predicted from the converged previous points of the chain (or None).
+
+    For the contact models the cold start (the h0 at which the pad contact alone carries the
+    load) already costs no pressure solve and is good; the prediction keeps it and adds the
+    neighbours' converged offset from *their* cold start, extrapolated linearly along the
+    chain (secant). For the hydrodynamic model the offset is the position itself. This choice
+    was measured (docs/sweeps.md, 'Warm start'): it never cost more Newton iterations than the
+    cold start on the axes tried, while a plain copy of the neighbour's position sometimes
+    did (e.g. along pad_roughness or pad_modulus).
+    ``prev`` and ``prev2`` are records of the two previous points (dicts with ``status``
+    ("ok" if solved), ``u`` (their position), ``cold_base`` (their cold start) and ``x`` (their
+    coordinate along the chain)); ``x`` is this point's coordinate.
+    Returns (start, cold_base) where cold_base is this point's cold start (stored for the next).
+    """
+    cold = None
+    if cfg.model != "hydrodynamic":
+        try:
+            cold = problem.contact_only_start()
+        except Exception:
+            return None, None  # the cold solve will say why
+    if not _solved(prev):
+        return None, cold
+    zero = np.zeros(3)
+
+    def offset(rec):
+        c = rec.get("cold_base")
+        if cfg.model != "hydrodynamic" and c is None:
+            return None
+        return np.asarray(rec["u"], dtype=float) - (np.asarray(c, dtype=float) if c is not None else zero)
+
+    d1 = offset(prev)
+    if d1 is None:
+        return None, cold
+    d = d1
+    if _solved(prev2) and x is not None and prev.get("x") is not None and prev2.get("x") is not None:
+        d2 = offset(prev2)
+        dx = prev["x"] - prev2["x"]
+        if d2 is not None and dx != 0:
+            d = d1 + (x - prev["x"]) / dx * (d1 - d2)
+    start = d + (cold if cold is not None else zero)
+    if not np.all(np.isfinite(start)):
+        return None, cold
+    return start, cold
+
+
 def config_key(config: Config) -> tuple:
     """A hashable identity of a Config: its SI inputs."""
     return tuple(sorted(config.to_dict().items()))
@@ -102,12 +154,13 @@ class PointCache:
         """The number of distinct configurations solved (equilibria)."""
         return len(self.outcomes)
 
-    def solve(self, config: Config, start=None) -> Outcome:
-        """The outcome of ``config``: solved now (warm from ``start``) or taken from the cache."""
+    def solve(self, config: Config, start=None, problem=None) -> Outcome:
+        """The outcome of ``config``: solved now (warm from ``start``, on ``problem`` if given, see
+        :func:`solve_point`) or taken from the cache."""
         key = config_key(config)
         if key not in self.outcomes:
             rate = self._reference_removal_rate(config, key) if self.relative else None
-            out = solve_point(config, start=start, relative=self.relative, reference_removal_rate=rate)
+            out = solve_point(config, start=start, relative=self.relative, problem=problem, reference_removal_rate=rate)
             self.outcomes[key] = out
             if out.ok:
                 self.factorizations += int(out.result.scalars["factorizations"])

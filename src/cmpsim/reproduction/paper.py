@@ -15,8 +15,8 @@ import numpy as np
 
 from .. import units
 from ..config import Config
-from ..model import reference_config
-from ..studies import PointCache, Progress, config_key
+from ..model import build_problem, reference_config
+from ..studies import PointCache, Progress, config_key, predict_start
 
 __all__ = ["CURVES", "FIGURES", "LOADS_PSI", "SPEEDS_RPM", "Curve", "FigureSpec", "Point", "RunData"]
 
@@ -155,14 +155,22 @@ def _solve_all(base: Config, progress: bool) -> tuple[RunData, int, int, list[st
     t0 = time.perf_counter()
     with Progress(progress, total, "reproduce") as bar:
         cache = PointCache(relative=True, advance=bar.advance)
-        curve, start = None, None
+        curve, prev, prev2 = None, None, None
         for c, sweep, x, cfg in plan:
             if (c, sweep) != curve:
-                curve, start = (c, sweep), None
-            out = cache.solve(cfg, start)
-            if out.ok:
-                start = out.result.solution.state.u
-            else:
+                curve, prev, prev2 = (c, sweep), None, None
+            # warm start predicted from the two previous points of the curve, as in a sweep chain
+            # (also for a point the cache holds: its cold base serves the next prediction)
+            try:
+                problem = build_problem(cfg)
+                start, cold = predict_start(cfg, problem, x, prev, prev2)
+            except ValueError:
+                problem, start, cold = None, None, None  # the solve reports the input error
+            out = cache.solve(cfg, start, problem=problem)
+            rec = {"status": "ok" if out.ok else "failed", "x": x, "cold_base": cold,
+                   "u": out.result.solution.state.u if out.ok else None}
+            prev2, prev = prev, rec
+            if not out.ok:
                 failures.append(f"{CURVES[c].label}, {x:g} {_UNITS[sweep]}: {out.error}")
             scalars = dict(out.result.scalars) if out.ok else None
             data.curves.setdefault((c, sweep), []).append(Point(c, sweep, x, cfg, scalars, "ok" if out.ok else out.error))

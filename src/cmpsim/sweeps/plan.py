@@ -16,6 +16,7 @@ import numpy as np
 
 from .._version import __version__
 from ..config import Config
+from ..studies import predict_start
 from .spec import SweepSpec
 
 __all__ = ["DEFAULT_CHAIN_LENGTH"]
@@ -83,44 +84,5 @@ def _ok(rec) -> bool:
     return isinstance(rec, dict) and rec.get("status") == "ok" and rec.get("u") is not None
 
 
-def _predict_start(cfg: Config, problem, x: float | None, prev, prev2):
-    """Newton start predicted from the converged previous points of the chain (or None).
-
-    For the contact models the cold start (the h0 at which the pad contact alone carries the
-    load) already costs no pressure solve and is good; the prediction keeps it and adds the
-    neighbours' converged offset from *their* cold start, extrapolated linearly along the
-    chain (secant). For the hydrodynamic model the offset is the position itself. This choice
-    was measured (docs/sweeps.md, 'Warm start'): it never cost more Newton iterations than the
-    cold start on the axes tried, while a plain copy of the neighbour's position sometimes
-    did (e.g. along pad_roughness or pad_modulus).
-    Returns (start, cold_base) where cold_base is this point's cold start (stored for the next).
-    """
-    cold = None
-    if cfg.model != "hydrodynamic":
-        try:
-            cold = problem.contact_only_start()
-        except Exception:
-            return None, None  # the cold solve will say why
-    if not _ok(prev):
-        return None, cold
-    zero = np.zeros(3)
-
-    def offset(rec):
-        c = rec.get("cold_base")
-        if cfg.model != "hydrodynamic" and c is None:
-            return None
-        return np.asarray(rec["u"], dtype=float) - (np.asarray(c, dtype=float) if c is not None else zero)
-
-    d1 = offset(prev)
-    if d1 is None:
-        return None, cold
-    d = d1
-    if _ok(prev2) and x is not None and prev.get("x") is not None and prev2.get("x") is not None:
-        d2 = offset(prev2)
-        dx = prev["x"] - prev2["x"]
-        if d2 is not None and dx != 0:
-            d = d1 + (x - prev["x"]) / dx * (d1 - d2)
-    start = d + (cold if cold is not None else zero)
-    if not np.all(np.isfinite(start)):
-        return None, cold
-    return start, cold
+#: The warm start along a chain (shared with `cmpsim reproduce`: :func:`cmpsim.studies.predict_start`).
+_predict_start = predict_start
