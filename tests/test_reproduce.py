@@ -1,8 +1,10 @@
 """`cmpsim reproduce`: ten figures with their CSVs, a generated trend table, REPORT.md/.html."""
 
 import copy
+import dataclasses
 import csv
 import re
+import threading
 
 import pytest
 from click.testing import CliRunner
@@ -156,3 +158,42 @@ def test_cmpsim_reproduce_is_the_function_even_after_importing_its_module():
     import cmpsim.reproduction  # noqa: F401
 
     assert cmpsim.reproduce is reproduce
+
+
+def test_figures_drawn_alongside_the_solve_equal_those_drawn_in_this_process(report, tmp_path):
+    # the forked figure process (issue 15) draws the same PNG, byte for byte, as this process
+    from cmpsim.reproduction import FIGURES
+    from cmpsim.reproduction.report import FigureWriter
+
+    specs = [s for s in FIGURES if s.number in (3, 7, 8)]
+    for name, processes in (("two", 2), ("one", 1)):
+        (tmp_path / name).mkdir()
+        writer = FigureWriter(processes=processes)
+        assert (writer._child is not None) == (processes == 2 and threading.active_count() == 1)
+        try:
+            writer.submit(specs[0], report.data, tmp_path / name / f"{specs[0].name}.png")
+            for spec in specs[1:]:
+                writer.defer(spec, report.data, tmp_path / name / f"{spec.name}.png")
+            writer.finish()
+        finally:
+            writer.close()
+    for spec in specs:
+        assert (tmp_path / "two" / f"{spec.name}.png").read_bytes() == (tmp_path / "one" / f"{spec.name}.png").read_bytes()
+
+
+def test_a_figure_that_fails_in_the_figure_process_is_raised_and_leaves_no_file(report, tmp_path):
+    from cmpsim.reproduction import FIGURES
+    from cmpsim.reproduction.report import FigureWriter
+
+    writer = FigureWriter(processes=2)
+    if writer._child is None:
+        pytest.skip("no second process here (one core, no fork, or other threads running)")
+    broken = dataclasses.replace(FIGURES[0], curves=("no-such-curve",))  # its data do not exist
+    try:
+        writer.submit(broken, report.data, tmp_path / "fig.png")
+        with pytest.raises(RuntimeError, match="(?s)drawing the figures failed.*no-such-curve"):
+            writer.finish()
+    finally:
+        writer.close()
+    assert not writer._child.is_alive()
+    assert list(tmp_path.iterdir()) == []

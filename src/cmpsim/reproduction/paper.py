@@ -142,8 +142,11 @@ def _plan(base: Config) -> list[tuple[str, str, float, Config]]:
     return plan
 
 
-def _solve_all(base: Config, progress: bool) -> tuple[RunData, int, int, list[str], float]:
+def _solve_all(base: Config, progress: bool, on_curve=None) -> tuple[RunData, int, int, list[str], float]:
     """Solve the plan, each distinct point once, warm-started along each curve.
+
+    ``on_curve(data, (curve, sweep))``, if given, is called when a curve is complete (the
+    figures of that curve can be drawn while the next ones are solved).
 
     The relative removal rate is normalised by this run's own solve of the reference case
     (:class:`cmpsim.studies.PointCache`), one of the planned points: exactly 1 there.
@@ -158,6 +161,8 @@ def _solve_all(base: Config, progress: bool) -> tuple[RunData, int, int, list[st
         curve, prev, prev2 = None, None, None
         for c, sweep, x, cfg in plan:
             if (c, sweep) != curve:
+                if curve is not None and on_curve is not None:
+                    on_curve(data, curve)
                 curve, prev, prev2 = (c, sweep), None, None
             # warm start predicted from the two previous points of the curve, as in a sweep chain
             # (also for a point the cache holds: its cold base serves the next prediction)
@@ -174,4 +179,6 @@ def _solve_all(base: Config, progress: bool) -> tuple[RunData, int, int, list[st
                 failures.append(f"{CURVES[c].label}, {x:g} {_UNITS[sweep]}: {out.error}")
             scalars = dict(out.result.scalars) if out.ok else None
             data.curves.setdefault((c, sweep), []).append(Point(c, sweep, x, cfg, scalars, "ok" if out.ok else out.error))
+    if curve is not None and on_curve is not None:
+        on_curve(data, curve)
     return data, len(cache), cache.factorizations, failures, time.perf_counter() - t0

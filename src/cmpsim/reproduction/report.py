@@ -190,49 +190,106 @@ def _plot(spec: FigureSpec, data: RunData, path: Path) -> None:
     plt.close(fig)
 
 
-def _plot_all(jobs: list[tuple[FigureSpec, RunData, Path]], processes: int | None = None) -> None:
-    """Write the figures of ``jobs`` ((spec, data, png path) each), on two processes if the
-    machine has two cores: a forked child draws every second figure while this process draws
-    the others (matplotlib draws one figure on one core; the ten figures of ``cmpsim
-    reproduce`` took as long as its 102 equilibria). Without ``fork`` (not Linux), with one
-    core, for a single figure, or when this process runs other threads (forking them is not
-    safe), they are drawn here, one after the other.
+class FigureWriter:
+    """Draws the figures of a run, on a second core while this process goes on solving.
+
+    On a machine with two or more cores where ``fork`` is available (Linux) and this process
+    runs no other thread (forking those is unsafe; the progress bar's thread starts later), a
+    child process is forked at construction: it imports matplotlib and then draws every
+    figure :meth:`submit` sends it (pickled over a pipe), while the curves of the next figures
+    are being solved. :meth:`finish` draws every second of the figures still unsent here,
+    sends the others, and waits for the child. Otherwise every figure is drawn here, one after
+    the other, by :meth:`finish`. matplotlib draws one figure on one core, and the ten figures
+    of ``cmpsim reproduce`` took about as long as its 102 equilibria.
 
     Each PNG is written atomically (:func:`cmpsim.io.atomic_path`), so a failure leaves no
-    partial file; a failure in the child is raised here as a RuntimeError.
+    partial file; a failure in the child is raised by :meth:`finish` as a RuntimeError.
     """
-    import multiprocessing
-    import os
-    import threading
 
-    if processes is None:
+    def __init__(self, processes: int | None = None):
+        import multiprocessing
+        import os
+        import threading
+
+        if processes is None:
+            try:
+                processes = len(os.sched_getaffinity(0))
+            except AttributeError:  # pragma: no cover - macOS / Windows
+                processes = os.cpu_count() or 1
+        self._late: list = []  # figures for finish(): drawn here or sent then
+        self._child = self._conn = None
+        forkable = "fork" in multiprocessing.get_all_start_methods()
+        if processes >= 2 and forkable and threading.active_count() == 1:
+            ctx = multiprocessing.get_context("fork")
+            self._conn, child_end = ctx.Pipe()
+            self._child = ctx.Process(target=_figure_worker, args=(child_end,), name="cmpsim-figures", daemon=True)
+            self._child.start()
+            child_end.close()
+
+    def submit(self, spec: FigureSpec, data: RunData, path: Path) -> None:
+        """Draw ``spec`` from ``data`` (its curves complete) into ``path``: now, on the child, if there is one."""
+        if self._child is not None:
+            self._conn.send((spec, data, path))
+        else:
+            self._late.append((spec, data, path))
+
+    def defer(self, spec: FigureSpec, data: RunData, path: Path) -> None:
+        """Draw ``spec`` at :meth:`finish` (its curves are complete only at the end)."""
+        self._late.append((spec, data, path))
+
+    def finish(self) -> None:
+        """Draw what is left and wait for the child; raises RuntimeError if a figure failed."""
+        if self._child is None:
+            for job in self._late:
+                _plot(*job)
+            return
+        mine = self._late[0::2]
         try:
-            processes = len(os.sched_getaffinity(0))
-        except AttributeError:  # pragma: no cover - macOS / Windows
-            processes = os.cpu_count() or 1
-    forkable = "fork" in multiprocessing.get_all_start_methods()
-    if processes < 2 or len(jobs) < 2 or not forkable or threading.active_count() > 1:
-        for job in jobs:
-            _plot(*job)
-        return
+            for job in self._late[1::2]:
+                self._conn.send(job)
+            self._conn.send(None)
+            for job in mine:
+                _plot(*job)
+        finally:
+            error = self._conn.recv() if self._conn.poll(None) else None
+            self._child.join()
+            self._conn.close()
+        if error:
+            raise RuntimeError(f"drawing the figures failed in the figure process:\n{error}")
+        if self._child.exitcode != 0:
+            raise RuntimeError(f"drawing the figures failed: the figure process ended with exit code {self._child.exitcode}")
+
+    def close(self) -> None:
+        """Stop the child if :meth:`finish` was not reached (the solve failed or was interrupted)."""
+        if self._child is not None and self._child.is_alive():
+            self._child.terminate()
+            self._child.join()
+
+
+def _figure_worker(conn) -> None:
+    """The child of :class:`FigureWriter`: draw each job received until None; send back "" or the error."""
+    import signal
+    import traceback
+
     import matplotlib
 
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C is the parent's to handle (it stops this child)
+
     matplotlib.use("Agg", force=False)
-    import matplotlib.pyplot  # noqa: F401  (imported once, before the fork: the child inherits it)
+    import matplotlib.pyplot  # noqa: F401  (while the parent solves)
 
-    child = multiprocessing.get_context("fork").Process(target=_plot_jobs, args=(jobs[1::2],), name="cmpsim-figures")
-    child.start()
-    try:
-        _plot_jobs(jobs[0::2])
-    finally:
-        child.join()
-    if child.exitcode != 0:
-        raise RuntimeError(f"drawing the figures failed in the child process (exit code {child.exitcode}; its traceback is above)")
-
-
-def _plot_jobs(jobs) -> None:
-    for job in jobs:
-        _plot(*job)
+    error = ""
+    while True:
+        job = conn.recv()
+        if job is None:
+            break
+        if not error:
+            try:
+                _plot(*job)
+            except Exception:
+                error = traceback.format_exc()
+    conn.send(error)
+    conn.close()
 
 
 # --------------------------------------------------------------------------- report
