@@ -125,6 +125,36 @@ def test_dask_scheduler_address_runs_the_same_sweep(tmp_path):
     xr.testing.assert_identical(remote, sweep(spec, workers=0, progress=False))
 
 
+@pytest.mark.slow
+def test_a_broken_dask_task_is_reported_and_its_chain_goes_on_from_the_cold_start(monkeypatch):
+    # a task that raises on the worker (not a failed solve: those come back as records) is
+    # reported as not computed; the next point of its chain is still solved, from its cold start
+    from distributed import LocalCluster
+
+    import cmpsim.sweeps as sweeps_module
+
+    spec = SweepSpec.from_mapping(tomllib.loads(SMALL.replace("num = 2", "num = 3")))
+    real = sweeps_module._run_point
+
+    def broken_first_point(task, prev=None, prev2=None):
+        if task["index"] == [0, 0]:
+            raise RuntimeError("worker lost")
+        return real(task, prev, prev2)
+
+    monkeypatch.setattr(sweeps_module, "_run_point", broken_first_point)
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=False, dashboard_address=None) as cluster:
+        ds = sweep(spec, scheduler=cluster.scheduler_address, progress=False)
+    status, start = ds["status"].values, ds["start"].values
+    assert status[0, 0] == "failed" and "the dask task failed (RuntimeError: worker lost)" in ds["error"].values[0, 0]
+    assert (status == "ok").sum() == 5
+    assert start[0, 1] == "cold" and start[0, 2] == "warm"  # the chain restarts after the broken point
+    monkeypatch.setattr(sweeps_module, "_run_point", real)
+    serial = sweep(spec, workers=0, progress=False)
+    for name in ("film_thickness_center", "attack_angle"):
+        np.testing.assert_allclose(ds[name].values[0, 1:], serial[name].values[0, 1:], rtol=1e-6)
+        np.testing.assert_array_equal(ds[name].values[1], serial[name].values[1])
+
+
 # ---------------------------------------------------------------------------- kill and resume
 
 

@@ -100,29 +100,45 @@ def _local_workers(requested: int | None, chains, done) -> int:
 
 
 def _run_dask(chains, done, base_json, warm_start, on_result, client):
+    """Run the chains on a Dask cluster, one task a point.
+
+    The next point of a chain is submitted when the previous one has come back, with the
+    records of the two previous points as plain arguments (not as futures): a dependency on
+    a future would make the scheduler place the whole chain on the worker that holds it, and
+    with more chains than workers (5 chains of 8 points on 2 workers) one worker would end
+    with a chain more than the other. Without it every ready point goes to the least busy
+    worker. ``priority=-depth`` keeps the chains advancing together.
+    """
     from distributed import as_completed
 
     tag = uuid.uuid4().hex[:10]
     run_point = _point_function()
     futures = {}
+    running = as_completed()
+
+    def submit_next(chain, pos, prev, prev2):
+        while pos < len(chain) and chain[pos].key in done:  # resumed: finished points feed the prediction
+            prev2, prev = prev, done[chain[pos].key]
+            pos += 1
+        if pos < len(chain):
+            p = chain[pos]
+            flat = "-".join(map(str, p.index))
+            fut = client.submit(
+                run_point, _payload(p, base_json, warm_start), prev, prev2, key=f"cmpsim-point-{tag}-{flat}", retries=0, priority=-pos
+            )
+            futures[fut] = (chain, pos, prev)
+            running.add(fut)
+
     for chain in chains:
-        prev = prev2 = None
-        for p in chain:
-            rec = done.get(p.key)
-            if rec is None:
-                flat = "-".join(map(str, p.index))
-                fut = client.submit(
-                    run_point, _payload(p, base_json, warm_start), prev, prev2, key=f"cmpsim-point-{tag}-{flat}", retries=0
-                )
-                futures[fut] = p
-                rec = fut
-            prev2, prev = prev, rec
+        submit_next(chain, 0, None, None)
     try:
-        for fut in as_completed(list(futures)):
-            p = futures[fut]
+        for fut in running:
+            chain, pos, prev = futures.pop(fut)
+            p = chain[pos]
             if fut.status == "finished":
-                on_result(p, fut.result(), True)
-            else:  # the worker died or the graph broke: report the point, do not persist it
+                rec = fut.result()
+                on_result(p, rec, True)
+            else:  # the worker died or the task broke: report the point, do not persist it
                 try:
                     exc = fut.exception()
                 except Exception as e:  # pragma: no cover
@@ -133,6 +149,7 @@ def _run_dask(chains, done, base_json, warm_start, on_result, client):
                     "start": "", "scalars": {}, "u": None, "cold_base": None,
                 }
                 on_result(p, rec, False)
+            submit_next(chain, pos + 1, rec, prev)
     finally:
         pending = [f for f in futures if f.status == "pending"]
         if pending:
