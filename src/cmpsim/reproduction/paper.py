@@ -117,6 +117,12 @@ class RunData:
         pts = self.curve(key, sweep)
         return np.array([p.x for p in pts]), np.array([p.get(output) for p in pts])
 
+    def subset(self, spec: "FigureSpec") -> "RunData":
+        """The curves of one figure only (what its plot needs; smaller to send to another process)."""
+        out = RunData()
+        out.curves = {(c, spec.sweep): self.curves[(c, spec.sweep)] for c in spec.curves if (c, spec.sweep) in self.curves}
+        return out
+
     def at_base(self, key: str, output: str) -> float:
         for p in self.curve(key, "load"):
             if p.x == BASE_LOAD_PSI:

@@ -197,8 +197,9 @@ class FigureWriter:
     runs no other thread (forking those is unsafe; the progress bar's thread starts later), a
     child process is forked at construction: it imports matplotlib and then draws every
     figure :meth:`submit` sends it (pickled over a pipe), while the curves of the next figures
-    are being solved. :meth:`finish` draws every second of the figures still unsent here,
-    sends the others, and waits for the child. Otherwise every figure is drawn here, one after
+    are being solved. :meth:`finish` sends the figures left for the end too (drawing them here
+    would first import matplotlib here, which took longer than the child needs for them) and
+    waits for the child. Otherwise every figure is drawn here, one after
     the other, by :meth:`finish`. matplotlib draws one figure on one core, and the ten figures
     of ``cmpsim reproduce`` took about as long as its 102 equilibria.
 
@@ -225,11 +226,28 @@ class FigureWriter:
             self._child = ctx.Process(target=_figure_worker, args=(child_end,), name="cmpsim-figures", daemon=True)
             self._child.start()
             child_end.close()
+            # a sender thread (started after the fork) writes the jobs to the pipe: a pipe
+            # write blocks while the child is busy, and the solve must not wait for it
+            import queue
+
+            self._jobs: queue.SimpleQueue = queue.SimpleQueue()
+            self._sender = threading.Thread(target=self._send_all, name="cmpsim-figures-sender", daemon=True)
+            self._sender.start()
+
+    def _send_all(self) -> None:
+        while True:
+            job = self._jobs.get()
+            try:
+                self._conn.send(job)
+            except (BrokenPipeError, OSError):  # the child is gone: finish() reports it
+                return
+            if job is None:
+                return
 
     def submit(self, spec: FigureSpec, data: RunData, path: Path) -> None:
         """Draw ``spec`` from ``data`` (its curves complete) into ``path``: now, on the child, if there is one."""
         if self._child is not None:
-            self._conn.send((spec, data, path))
+            self._jobs.put((spec, data.subset(spec), path))
         else:
             self._late.append((spec, data, path))
 
@@ -243,15 +261,16 @@ class FigureWriter:
             for job in self._late:
                 _plot(*job)
             return
-        mine = self._late[0::2]
         try:
-            for job in self._late[1::2]:
-                self._conn.send(job)
-            self._conn.send(None)
-            for job in mine:
-                _plot(*job)
+            for spec, data, path in self._late:
+                self._jobs.put((spec, data.subset(spec), path))
+            self._jobs.put(None)
         finally:
-            error = self._conn.recv() if self._conn.poll(None) else None
+            self._sender.join()
+            try:
+                error = self._conn.recv()
+            except (EOFError, OSError):  # the child died without a word
+                error = None
             self._child.join()
             self._conn.close()
         if error:
@@ -264,6 +283,7 @@ class FigureWriter:
         if self._child is not None and self._child.is_alive():
             self._child.terminate()
             self._child.join()
+            self._conn.close()
 
 
 def _figure_worker(conn) -> None:
