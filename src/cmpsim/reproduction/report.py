@@ -239,7 +239,7 @@ class FigureWriter:
             job = self._jobs.get()
             try:
                 self._conn.send(job)
-            except (BrokenPipeError, OSError):  # the child is gone: finish() reports it
+            except (OSError, ValueError):  # the child is gone (or was stopped): finish() reports it
                 return
             if job is None:
                 return
@@ -281,8 +281,10 @@ class FigureWriter:
     def close(self) -> None:
         """Stop the child if :meth:`finish` was not reached (the solve failed or was interrupted)."""
         if self._child is not None and self._child.is_alive():
+            self._jobs.put(None)  # the sender thread ends too
             self._child.terminate()
             self._child.join()
+            self._sender.join(timeout=5.0)
             self._conn.close()
 
 
