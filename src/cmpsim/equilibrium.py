@@ -711,7 +711,9 @@ def solve_equilibrium(
         steps) then runs where each solve is cheap. Default (None): for the hydrodynamic
         variant and for grids finer than 48x128 on a rigid pad without JFO cavitation. The
         converged position is the one of this grid (to ``tol``); the coarse factorisations
-        are counted in ``factorizations``.
+        are counted in ``factorizations``. Otherwise, for the contact models on a rigid pad
+        without JFO cavitation, a cold start takes its first Newton step on the 8x24 grid
+        (:func:`_coarse_first_step`; ``warm_start=False`` switches that off too).
 
     Raises
     ------
