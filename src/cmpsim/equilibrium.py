@@ -68,6 +68,11 @@ JACOBIAN_REFINE_LIMIT = 10
 #: refinement stop at this relative accuracy (the pressure solves themselves go to round-off).
 JACOBIAN_RTOL = 1e-10
 
+#: Within this factor of the tolerance, Newton keeps its last Jacobian (a chord step): the
+#: Jacobian changes by about the relative size of the last step, so the chord step still
+#: shrinks the residual by orders of magnitude, and a Jacobian costs more than a pressure solve.
+CHORD_MERIT = 100.0
+
 #: Gauge pressure of absolute vacuum, Pa (one standard atmosphere below ambient): the lowest
 #: admissible cavitation pressure.
 VACUUM_GAUGE_PRESSURE = -101325.0
@@ -889,6 +894,7 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
     """The safeguarded Newton loop of :func:`solve_equilibrium`: (u, state, steps, history)."""
     history = [(u.copy(), st.residual.copy())]
     it = 0
+    J = st_j = None
     # trust radius (sigma): on a rigid pad with contact shrunk to twice the step the line search accepted,
     # regrown by 2 on every full step, so that a step that had to be cut is not retried from max_step
     trust = max_step
@@ -896,7 +902,12 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
         if it >= max_iter:
             raise EquilibriumError(f"Newton did not converge in {max_iter} steps; {_diagnosis(problem, st)}")
         it += 1
-        J = problem.jacobian(st)
+        if J is None or _merit(st.residual) > CHORD_MERIT * tol or problem.foundation is not None:
+            J = problem.jacobian(st)
+            st_j = st
+        elif st.dphi_du is None and st_j.dphi_du is not None:
+            # the chord step: the last Jacobian (and its dphi/du for the refinement start)
+            st.dphi_du = st_j.dphi_du
         try:
             step = -np.linalg.solve(J, st.residual)
         except np.linalg.LinAlgError as exc:
