@@ -5,7 +5,12 @@
   real calls of the solver (``WaferProblem(solver=...)`` is used for every pressure solve);
 - the one-evaluation Jacobian (dc/dh times the geometric dh/du) is the derivative of the
   residuals;
-- the coarse-grid warm start converges to the position of the cold start;
+- the coarse-grid warm start converges to the position of the cold start, and so does the
+  cold start whose first Newton step is taken on 8x24;
+- refinement started from the linearised pressure of the last Jacobian gives the same
+  pressure in fewer back-substitutions;
+- the chord step (the last Jacobian kept near convergence) is taken only there and lands on
+  the same position;
 - the per-grid assembly map gives the matrix of the entries it was built from.
 """
 
@@ -125,3 +130,56 @@ def test_assembly_map_sums_the_entries_it_was_built_from():
     direct = sp.coo_matrix((w * c[src], (rows, cols)), shape=(N, N)).tocsr()
     A = assemble_operator(pr.grid, coeffs)
     assert abs(A - direct).max() <= 1e-14 * abs(direct).max()
+
+
+def test_refinement_from_the_linearised_pressure_gives_the_fresh_lu_pressure_in_fewer_steps():
+    # the Newton trial positions start the refinement at phi + (dphi/du) du (issue 15)
+    pr = _problem()
+    u = pr.contact_only_start()
+    st = pr.state(u)
+    pr.jacobian(st)
+    assert st.dphi_du is not None and st.dphi_du.shape == (pr.grid.size, 3)
+    du = np.array([1e-3 * pr.sigma, 2e-7, 1e-8])
+    coeffs = pr.face_coefficients(u + du)
+    fresh = ReynoldsSystem(pr.grid, coeffs).solve()
+    plain, guessed = LinearSolveStats(), LinearSolveStats()
+    phi_plain = ReynoldsSystem(pr.grid, coeffs, reference=st.system.factor, stats=plain).solve()
+    guess = st.phi.ravel() + st.dphi_du @ du
+    phi_guess = ReynoldsSystem(pr.grid, coeffs, reference=st.system.factor, stats=guessed).solve(x0=guess)
+    scale = np.max(np.abs(fresh))
+    assert np.max(np.abs(phi_plain - fresh)) <= 1e-12 * scale
+    assert np.max(np.abs(phi_guess - fresh)) <= 1e-12 * scale
+    assert guessed.factorizations == plain.factorizations == 0
+    assert guessed.back_substitutions < plain.back_substitutions
+
+
+@pytest.mark.parametrize("settings", [{}, {"model": "elastic", "applied_pressure": "6 psi"}, {"grid": "48x128"}])
+def test_the_coarse_first_step_lands_on_the_equilibrium_of_the_target_grid(settings):
+    # a cold start's first Newton step on 8x24: one LU on the target grid, the same position
+    first = solve_equilibrium(_problem(**settings))
+    plain = solve_equilibrium(_problem(**settings), warm_start=False)  # no coarse step at all
+    assert first.factorizations == 2  # one on 8x24, one on the target grid
+    assert first.iterations <= plain.iterations
+    np.testing.assert_allclose(first.state.u[:2], plain.state.u[:2], rtol=1e-8)
+    assert abs(first.state.u[2] - plain.state.u[2]) <= 1e-8 * abs(plain.state.u[1])
+    assert np.max(np.abs(first.state.residual)) < 1e-9
+
+
+def test_the_chord_step_keeps_the_last_jacobian_only_near_convergence(monkeypatch):
+    # at 96x256 the residual after the first step is ~1e-7 (within CHORD_MERIT x tol): one
+    # Jacobian for two steps; the converged residual is still below the tolerance
+    from cmpsim import equilibrium
+
+    pr = _problem(grid="96x256")
+    calls = []
+    real = equilibrium.WaferProblem.jacobian
+    monkeypatch.setattr(equilibrium.WaferProblem, "jacobian", lambda self, st, *a: calls.append(self.grid.size) or real(self, st, *a))
+    sol = solve_equilibrium(pr)
+    fine = [n for n in calls if n == pr.grid.size]
+    assert sol.iterations == 2 and len(fine) == 1
+    assert np.max(np.abs(sol.state.residual)) < 1e-9
+    monkeypatch.setattr(equilibrium, "CHORD_MERIT", 0.0)  # a Jacobian at every step
+    calls.clear()
+    exact = solve_equilibrium(_problem(grid="96x256"))
+    assert len([n for n in calls if n == pr.grid.size]) == 2
+    np.testing.assert_allclose(sol.state.u[:2], exact.state.u[:2], rtol=1e-8)
