@@ -114,7 +114,7 @@ def _run_dask(chains, done, base_json, warm_start, on_result, client):
     tag = uuid.uuid4().hex[:10]
     run_point = _point_function()
     futures = {}
-    running = as_completed()
+    running = as_completed(with_results=True, raise_errors=False)
 
     def submit_next(chain, pos, prev, prev2):
         while pos < len(chain) and chain[pos].key in done:  # resumed: finished points feed the prediction
@@ -132,11 +132,11 @@ def _run_dask(chains, done, base_json, warm_start, on_result, client):
     for chain in chains:
         submit_next(chain, 0, None, None)
     try:
-        for fut in running:
+        for fut, result in running:
             chain, pos, prev = futures.pop(fut)
             p = chain[pos]
             if fut.status == "finished":
-                rec = fut.result()
+                rec = result
                 on_result(p, rec, True)
             else:  # the worker died or the task broke: report the point, do not persist it
                 try:
