@@ -71,6 +71,21 @@ def test_params_lists_every_input_with_its_unit_range_source_and_choices(client)
 # ---------------------------------------------------------------------------- solve
 
 
+def test_outputs_lists_every_scalar_of_a_solve_with_its_display_unit(client):
+    from cmpsim import outputs
+
+    r = client.get("/api/outputs")
+    assert r.status_code == 200
+    listed = {o["name"]: o for o in r.json()}
+    body = client.post("/api/solve", json={"grid": "coarse"}).json()
+    assert set(body["values"]) | set(body["solver"]) <= set(listed)
+    for name, o in listed.items():
+        entry = outputs.scalar(name)
+        assert (o["unit"], o["display_unit"], o["display_factor"], o["long_name"]) == (entry.unit, entry.display_unit, entry.display_factor, entry.long_name)
+        assert o["unit"] == body["units"].get(name, o["unit"])  # the same SI unit the solve answers with
+    assert (listed["film_thickness_center"]["display_unit"], listed["film_thickness_center"]["display_factor"]) == ("um", 1e6)
+
+
 def test_solve_answers_exactly_the_object_cmpsim_run_json_prints(client):
     r = client.post("/api/solve", json={"applied_pressure": "3 psi", "grid": "coarse"})
     assert r.status_code == 200 and r.headers["content-type"] == "application/json"

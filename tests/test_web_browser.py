@@ -121,7 +121,14 @@ def test_a_value_with_a_unit_solves_and_the_results_table_and_the_map_appear(pag
     page.wait_for_selector("#map-removal_rate .main-svg")
     data = json.loads(cmpsim.solve(applied_pressure="3 psi", grid="coarse").to_json())
     expected = {**data["values"], **data["solver"]}  # schema 2: the table shows values and solver diagnostics
-    assert float(cell.get_attribute("title")) == expected["film_thickness_center"]
+    assert float(cell.get_attribute("title")) == expected["film_thickness_center"]  # the SI value
+    # shown in the display unit of the outputs registry: um for the film, % for the load shares
+    unit_of = lambda key: page.eval_on_selector(f'#results td[data-key="{key}"]', "c => c.nextElementSibling.textContent")  # noqa: E731
+    assert float(cell.text_content()) == pytest.approx(expected["film_thickness_center"] * 1e6, rel=1e-4)
+    assert unit_of("film_thickness_center") == "\u00b5m"
+    fluid = page.text_content('#results td[data-key="fluid_load_fraction"]')
+    assert float(fluid) == pytest.approx(expected["fluid_load_fraction"] * 100.0, rel=1e-4, abs=1e-9)
+    assert unit_of("fluid_load_fraction") == "%"
     keys = page.eval_on_selector_all("#results td[data-key]", "cells => cells.map(c => c.dataset.key)")
     assert set(keys) == set(expected)
     for map_id in ("map-removal_rate", "map-film_thickness", "map-pressure"):

@@ -374,6 +374,15 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
     def params():
         return _params_payload()
 
+    @app.get("/api/outputs", summary="Every scalar output: name, kind, SI unit, display unit and factor, description")
+    def outputs_list():
+        from .. import outputs
+
+        return [
+            {"name": o.name, "kind": o.kind, "unit": o.unit, "display_unit": o.display_unit, "display_factor": o.display_factor, "long_name": o.long_name}
+            for o in (outputs.scalar(n) for n in outputs.scalar_names())
+        ]
+
     # ------------------------------------------------------------------ API: one operating point
     @app.post(
         "/api/solve",

@@ -230,6 +230,12 @@ function valuesOf(data) {
   return flat;
 }
 
+// Output name -> {display_unit, display_factor, unit, long_name} (GET /api/outputs): the table
+// shows each value in its display unit, the SI value in the tooltip.
+const OUTPUTS = {};
+const UNIT_TEXT = { um: "\u00b5m", urad: "\u00b5rad", "-": "" };
+function unitText(u) { return u in UNIT_TEXT ? UNIT_TEXT[u] : u || ""; }
+
 function renderResults(data) {
   const units = data.units || {};
   const rows = Object.entries(valuesOf(data));
@@ -242,10 +248,14 @@ function renderResults(data) {
     n.textContent = name;
     const v = document.createElement("td");
     v.dataset.key = name;
-    v.textContent = fmt(value);
-    v.title = String(value);
+    const out = OUTPUTS[name];
+    const shown = out && typeof value === "number" && out.display_unit !== out.unit && out.display_unit !== "-";
+    v.textContent = shown ? fmt(value * out.display_factor) : fmt(value);
+    v.title = String(value); // the SI value, as the API answered it
     const u = document.createElement("td");
-    u.textContent = units[name] || "";
+    u.textContent = shown ? unitText(out.display_unit) : unitText(units[name] || "");
+    u.title = units[name] ? `SI: ${units[name]}` : "";
+    if (out) n.title = out.long_name;
     tr.append(n, v, u);
     tbody.append(tr);
   }
@@ -580,7 +590,8 @@ async function cancelSweep() {
 
 // ------------------------------------------------------------------ start
 async function main() {
-  const [params, info] = await Promise.all([api("GET", "/api/params"), api("GET", "/api/info")]);
+  const [params, info, outputs] = await Promise.all([api("GET", "/api/params"), api("GET", "/api/info"), api("GET", "/api/outputs")]);
+  if (outputs.ok) for (const o of outputs.data) OUTPUTS[o.name] = o;
   if (!params.ok) {
     $("loading").textContent = `Cannot load the inputs: ${errorText(params)}`;
     return;
