@@ -183,3 +183,15 @@ def test_the_chord_step_keeps_the_last_jacobian_only_near_convergence(monkeypatc
     exact = solve_equilibrium(_problem(grid="96x256"))
     assert len([n for n in calls if n == pr.grid.size]) == 2
     np.testing.assert_allclose(sol.state.u[:2], exact.state.u[:2], rtol=1e-8)
+
+
+def test_a_coarse_first_step_that_leads_nowhere_falls_back_to_the_plain_cold_start(monkeypatch):
+    from cmpsim import equilibrium
+
+    pr = _problem()
+    # a start tilted so far that the wafer edge would cut through the pad: no load balance there
+    monkeypatch.setattr(equilibrium, "_coarse_first_step", lambda problem, max_step: np.array([problem.sigma, 1e-2, 0.0]))
+    got = solve_equilibrium(pr)
+    plain = solve_equilibrium(_problem(), warm_start=False)
+    np.testing.assert_allclose(got.state.u[:2], plain.state.u[:2], rtol=1e-8)
+    assert np.max(np.abs(got.state.residual)) < 1e-9

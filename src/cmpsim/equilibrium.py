@@ -728,13 +728,33 @@ def solve_equilibrium(
     warm = start is not None
     if start is None and (_use_warm_start(problem) if warm_start is None else warm_start):
         start = _coarse_start(problem, max_iter, max_step)
+    coarse_step = False
     if start is None and _use_coarse_step(problem) and warm_start is not False:
         start = _coarse_first_step(problem, max_step)
+        coarse_step = start is not None
     if start is None:
         try:
             start = problem.fluid_start() if problem.variant == "hydrodynamic" else problem.contact_only_start()
         except ValueError as exc:  # a kernel refused every trial film
             raise EquilibriumError(f"no admissible start position: {exc}") from exc
+    try:
+        u, st, it, history = _from_start(problem, start, warm, tol, max_iter, max_step)
+    except (EquilibriumError, ValueError):
+        if not coarse_step:
+            raise
+        # the coarse grid's first step led nowhere on this grid: start again as without it
+        return solve_equilibrium(problem, None, tol, max_iter, max_step, warm_start=False)
+    if problem._reference is not None:
+        cache = _last_factors()
+        if len(cache) > 8:
+            cache.clear()
+        cache[problem.grid] = problem._reference
+    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+
+
+def _from_start(problem: WaferProblem, start, warm: bool, tol: float, max_iter: int, max_step: float):
+    """Newton from ``start`` (with the load balanced first if far off, and for a Newtonian
+    slurry one restart from an attack-angle scan): (u, state, steps, history)."""
     u = np.asarray(start, dtype=float).copy()
     if warm and problem._reference is None:
         # a warm start continues a chain of neighbouring points (sweeps, `cmpsim reproduce`):
@@ -763,12 +783,7 @@ def solve_equilibrium(
             u, st, it, history = _newton(problem, u, st, tol, max_iter, max_step)
         except (EquilibriumError, ValueError) as second:
             raise EquilibriumError(f"{first}; a restart from an attack-angle scan failed too: {second}") from first
-    if problem._reference is not None:
-        cache = _last_factors()
-        if len(cache) > 8:
-            cache.clear()
-        cache[problem.grid] = problem._reference
-    return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
+    return u, st, it, history
 
 
 _THREAD = threading.local()
