@@ -918,7 +918,13 @@ def _newton(problem: WaferProblem, u, st: PressureState, tol: float, max_iter: i
             raise EquilibriumError(f"Newton did not converge in {max_iter} steps; {_diagnosis(problem, st)}")
         it += 1
         if J is None or _merit(st.residual) > CHORD_MERIT * tol or problem.foundation is not None:
-            J = problem.jacobian(st)
+            with np.errstate(over="ignore", invalid="ignore"):  # judged just below, by name
+                J = problem.jacobian(st)
+            if not np.all(np.isfinite(J)):
+                raise EquilibriumError(
+                    f"the Jacobian is not finite at h0 = {u[0]:.6g} m, attack angle {u[1]:.4g} rad (the slurry pressure "
+                    f"of a perturbed position overflows); {_diagnosis(problem, st)}"
+                )
             st_j = st
         elif st.dphi_du is None and st_j.dphi_du is not None:
             # the chord step: the last Jacobian (and its dphi/du for the refinement start)
