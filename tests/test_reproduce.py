@@ -171,7 +171,7 @@ assert threading.active_count() == 1, "the sender thread outlived the run"
 serial = FigureWriter(processes=1)
 assert serial._child is None
 for spec in FIGURES:
-    serial.defer(spec, rep.data, out / "serial" / f"{spec.name}.png")
+    serial.submit(spec, rep.data, out / "serial" / f"{spec.name}.png")
 serial.finish()
 same = all((out / "run" / f"{s.name}.png").read_bytes() == (out / "serial" / f"{s.name}.png").read_bytes() for s in FIGURES)
 print("same:", same)

@@ -437,7 +437,7 @@ class WaferProblem:
             system.factor
             self._reference = system.own_factor
         dphis = -system.solve_linear(dr, rtol=JACOBIAN_RTOL)
-        st.dphi_du = dphis / np.array([du[k] for k, du in enumerate(steps)])
+        st.dphi_du = dphis / (rel_step * self.u_scale)  # the columns' steps du_k
         # contact depends on the local film only: one evaluation gives its derivative in h
         if self.variant == "hydrodynamic":
             dpc = dar = 0.0

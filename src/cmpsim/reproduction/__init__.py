@@ -29,8 +29,8 @@ from pathlib import Path
 from .._version import __version__
 from ..config import Config
 from .checks import SIMILAR, SLIGHT, STATEMENTS, Statement, StatementResult, evaluate_statements
-from .paper import BASE_LOAD_PSI, BASE_SPEED_RPM, CURVES, FIGURES, LOADS_PSI, SPEEDS_RPM, Curve, FigureSpec, Point, RunData, _plan, _solve_all
-from .report import CSV_COLUMNS, FigureResult, ReproductionReport, _blocks, _csv_rows, _notes, _plot, FigureWriter, _render_html, _render_md, _write_csv, _write_csv_trends
+from .paper import BASE_LOAD_PSI, BASE_SPEED_RPM, CURVES, FIGURES, LOADS_PSI, SPEEDS_RPM, Curve, FigureSpec, Point, RunData, _solve_all
+from .report import CSV_COLUMNS, FigureResult, ReproductionReport, _blocks, _csv_rows, _notes, FigureWriter, _render_html, _render_md, _write_csv, _write_csv_trends
 
 __all__ = [
     "reproduce",
@@ -45,12 +45,6 @@ __all__ = [
     "SLIGHT",
     "SIMILAR",
 ]
-
-
-def _final_curve(base: Config) -> tuple[str, str]:
-    """The (curve, sweep) solved last."""
-    c, sweep, *_ = _plan(base)[-1]
-    return c, sweep
 
 
 def reproduce(out=None, grid: str | None = None, progress: bool = True, config: Config | None = None, command: str | None = None) -> ReproductionReport:
@@ -87,15 +81,11 @@ def reproduce(out=None, grid: str | None = None, progress: bool = True, config: 
 
     def curve_done(data, _curve) -> None:
         for spec in FIGURES:
-            if spec.name not in sent and all((c, spec.sweep) in data.curves for c in spec.curves) and not _last_curves(spec):
+            if spec.name not in sent and all((c, spec.sweep) in data.curves for c in spec.curves):
                 writer.submit(spec, data, out / f"{spec.name}.png")
                 sent.add(spec.name)
 
-    def _last_curves(spec) -> bool:  # the figures of the final curve are left to finish()
-        return (spec.curves[-1], spec.sweep) == final
-
     try:
-        final = _final_curve(base)
         data, n_eq, n_fact, failures, solve_s = _solve_all(base, progress, on_curve=curve_done)
         figures = []
         for spec in FIGURES:
@@ -107,8 +97,8 @@ def reproduce(out=None, grid: str | None = None, progress: bool = True, config: 
                 f"grid {base.numerics.grid}; other inputs: see REPORT.md (parameter set); SI unless the column name says otherwise",
             ]
             _write_csv(csv_path, rows, header)
-            if spec.name not in sent:
-                writer.defer(spec, data, png_path)
+            if spec.name not in sent:  # (every figure's curves are solved by now: none is left)
+                writer.submit(spec, data, png_path)
             figures.append(FigureResult(spec, png_path, csv_path, rows))
         writer.finish()
     finally:

@@ -197,10 +197,10 @@ class FigureWriter:
     runs no other thread (forking those is unsafe; the progress bar's thread starts later), a
     child process is forked at construction: it imports matplotlib and then draws every
     figure :meth:`submit` sends it (pickled over a pipe), while the curves of the next figures
-    are being solved. :meth:`finish` sends the figures left for the end too (drawing them here
-    would first import matplotlib here, which took longer than the child needs for them) and
-    waits for the child. Otherwise every figure is drawn here, one after
-    the other, by :meth:`finish`. matplotlib draws one figure on one core, and the ten figures
+    are being solved (the figures of the last curve too: drawing them here would first import
+    matplotlib here, which took longer than the child needs for them); :meth:`finish` waits
+    for the child. Otherwise every figure is drawn here, one after the other, by
+    :meth:`finish`. matplotlib draws one figure on one core, and the ten figures
     of ``cmpsim reproduce`` took about as long as its 102 equilibria.
 
     Each PNG is written atomically (:func:`cmpsim.io.atomic_path`), so a failure leaves no
@@ -217,7 +217,7 @@ class FigureWriter:
                 processes = len(os.sched_getaffinity(0))
             except AttributeError:  # pragma: no cover - macOS / Windows
                 processes = os.cpu_count() or 1
-        self._late: list = []  # figures for finish(): drawn here or sent then
+        self._late: list = []  # without a child: the figures finish() draws here
         self._child = self._conn = None
         forkable = "fork" in multiprocessing.get_all_start_methods()
         if processes >= 2 and forkable and threading.active_count() == 1:
@@ -251,28 +251,20 @@ class FigureWriter:
         else:
             self._late.append((spec, data, path))
 
-    def defer(self, spec: FigureSpec, data: RunData, path: Path) -> None:
-        """Draw ``spec`` at :meth:`finish` (its curves are complete only at the end)."""
-        self._late.append((spec, data, path))
-
     def finish(self) -> None:
         """Draw what is left and wait for the child; raises RuntimeError if a figure failed."""
         if self._child is None:
             for job in self._late:
                 _plot(*job)
             return
+        self._jobs.put(None)
+        self._sender.join()
         try:
-            for spec, data, path in self._late:
-                self._jobs.put((spec, data.subset(spec), path))
-            self._jobs.put(None)
-        finally:
-            self._sender.join()
-            try:
-                error = self._conn.recv()
-            except (EOFError, OSError):  # the child died without a word
-                error = None
-            self._child.join()
-            self._conn.close()
+            error = self._conn.recv()
+        except (EOFError, OSError):  # the child died without a word
+            error = None
+        self._child.join()
+        self._conn.close()
         if error:
             raise RuntimeError(f"drawing the figures failed in the figure process:\n{error}")
         if self._child.exitcode != 0:

@@ -19,9 +19,10 @@ Execution
 ---------
 Each point is one dask task. Points are grouped into *chains* along the last numeric axis
 (at most ``chain_length`` points, a fixed split that does not depend on the number of workers)
-and each task of a chain receives the converged records of the one or two previous points of
-its chain as dask dependencies. The start of Newton is predicted from them (see
-:func:`_predict_start`); if a predicted start fails, the point is solved again from the cold
+and each task of a chain is submitted when the previous point of its chain has come back, with
+the converged records of the one or two previous points as plain arguments (not as dask
+dependencies, which would pin a chain to one worker). The start of Newton is predicted from
+them (see :func:`cmpsim.studies.predict_start`); if a predicted start fails, the point is solved again from the cold
 start. The result of a point therefore depends only on the chain layout, never on how many
 workers there are or on the order in which points finish.
 

@@ -15,7 +15,8 @@ import uuid
 from functools import lru_cache
 
 from ..config import Config
-from .plan import _PlanPoint, _predict_start
+from ..studies import predict_start
+from .plan import _PlanPoint
 from .spec import SweepError
 
 __all__ = ["local_cluster"]
@@ -53,7 +54,7 @@ def _run_point(task: dict, prev=None, prev2=None) -> dict:
         return rec
     start = None
     if task["warm_start"]:
-        start, cold = _predict_start(cfg, problem, task["x"], prev, prev2)
+        start, cold = predict_start(cfg, problem, task["x"], prev, prev2)
         rec["cold_base"] = None if cold is None else [float(v) for v in cold]
     out = solve_point(cfg, start=start, relative=True, problem=problem)  # the problem built above, not again
     rec["start"] = out.start

@@ -15,8 +15,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._version import __version__
-from ..config import Config
-from ..studies import predict_start
 from .spec import SweepSpec
 
 __all__ = ["DEFAULT_CHAIN_LENGTH"]
@@ -78,11 +76,3 @@ def _plan(spec: SweepSpec, identity: str, warm_start: bool, chain_length: int) -
         for part in np.array_split(np.arange(len(g)), n_seg):
             chains.append([g[i] for i in part])
     return chains
-
-
-def _ok(rec) -> bool:
-    return isinstance(rec, dict) and rec.get("status") == "ok" and rec.get("u") is not None
-
-
-#: The warm start along a chain (shared with `cmpsim reproduce`: :func:`cmpsim.studies.predict_start`).
-_predict_start = predict_start
