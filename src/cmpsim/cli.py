@@ -170,7 +170,7 @@ def params(markdown):
     rows, detail = [], []
     for n, p in PARAMETERS.items():
         unit = p.display if p.unit not in ("choice", "grid") else ""
-        default = format_display(n, p.default) + (f" {unit}" if unit else "")
+        default = format_display(n, p.default) + (f" {unit}" if unit else "") if p.default != () else "unset"
         # narrow terminals: the default above its valid range, both in the display unit
         rows.append((n, default, p.display_range_text()) if console.width >= WIDE else (n, f"{default}\n{p.display_range_text()}"))
         detail.append(f"{p.description}. Source: {p.source}")

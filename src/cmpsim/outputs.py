@@ -333,6 +333,8 @@ def json_schema() -> dict:
     for n, p in PARAMETERS.items():
         if p.choices or p.unit == "grid":
             inputs[n] = {"type": "string", "description": p.description}
+        elif p.items:
+            inputs[n] = {"type": "array", "items": {"type": "number"}, "description": f"{p.description} [{p.unit}]"}
         else:
             unit = p.unit or "1"
             inputs[n] = {"type": "integer" if isinstance(p.default, int) else "number", "description": f"{p.description} [{unit}]"}

@@ -104,6 +104,11 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
     """The :class:`~cmpsim.equilibrium.WaferProblem` of a Config (``setup`` if already built)."""
     s = setup or physical_setup(config)
     check_geometry(config.dome_height, s.grid.radius)
+    if config.carrier != "rigid":
+        raise ValueError(
+            f"carrier = {config.carrier!r}: the membrane carrier's plate (cmpsim.plate) is not coupled to the equilibrium yet; "
+            "valid value 'rigid' (docs/limitations.md)"
+        )
     return WaferProblem(
         s.grid,
         config.dome_height,
