@@ -5,7 +5,7 @@ import pytest
 from scipy.special import jv
 
 from cmpsim.grid import PolarGrid
-from cmpsim.plate import KirchhoffPlate, PlateOperator, bending_stiffness
+from cmpsim.plate import KirchhoffPlate, PlateOperator, bending_stiffness, zone_load
 from cmpsim.testing.plates import free_plate_balanced_load, winkler_bessel_mode
 
 WAFER = KirchhoffPlate(381e-6, 130e9, 0.28)  # 3-inch silicon wafer (SEMI M1; Hopcroft et al. 2010)
@@ -109,3 +109,15 @@ def test_bad_plate_inputs_are_refused_by_name():
         KirchhoffPlate(1e-3, 130e9, 0.5)
     with pytest.raises(ValueError, match="foundation stiffness"):
         PlateOperator(WAFER, PolarGrid(A, 8, 8), -1.0)
+
+
+def test_zone_load_carries_the_membranes_load_exactly_wherever_the_zone_boundaries_fall():
+    g = PolarGrid(0.15, 24, 16)  # ring width 6.25 mm: boundaries at 50 and 100 mm on faces, 130 and 145 mm inside rings
+    radii, pressures = (0.05, 0.1, 0.13, 0.145, 0.15), (2e4, 2e4, 2.4e4, 2.8e4, 1.4e4)
+    q = zone_load(g, radii, pressures)
+    load = sum(p * np.pi * (b * b - a * a) for p, a, b in zip(pressures, (0.0,) + radii[:-1], radii))
+    assert g.integrate(q) == pytest.approx(load, rel=1e-14)
+    assert np.all(q[:16] == 2e4)  # zones 1 and 2 end on faces (50 and 100 mm)
+    last = (2.8e4 * (0.145**2 - 0.14375**2) + 1.4e4 * (0.15**2 - 0.145**2)) / (0.15**2 - 0.14375**2)
+    assert q[-1] == pytest.approx(np.full(16, last), rel=1e-14)
+    assert 2.4e4 < q[20, 0] < 2.8e4  # ring 20 spans 125-131.25 mm: part of zones 3 and 4

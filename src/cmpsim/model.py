@@ -26,7 +26,7 @@ def reference_config(config: Config) -> Config:
     """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE` with the pad at its
     ``reference_roughness``, every other input equal (the paper's d = 100 nm, sigma = 15 um, 4 psi,
     60 rpm in the paper preset)."""
-    return config.replace(model="lep", pad_roughness=config.reference_roughness, **REFERENCE_CASE)
+    return config.replace(model="lep", pad_roughness=config.reference_roughness, zone_pressures="", **REFERENCE_CASE)
 
 
 def _reference_removal_rate(ref: Config) -> float:

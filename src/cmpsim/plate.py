@@ -46,7 +46,7 @@ from scipy.sparse.linalg import splu
 
 from .grid import PolarGrid
 
-__all__ = ["bending_stiffness", "KirchhoffPlate", "PlateDeflection", "PlateOperator"]
+__all__ = ["bending_stiffness", "KirchhoffPlate", "PlateDeflection", "PlateOperator", "zone_load"]
 
 
 def bending_stiffness(thickness, modulus, poisson):
@@ -55,6 +55,24 @@ def bending_stiffness(thickness, modulus, poisson):
     Timoshenko & Woinowsky-Krieger (1959), eq. 3.
     """
     return np.asarray(modulus, dtype=float) * np.asarray(thickness, dtype=float) ** 3 / (12.0 * (1.0 - np.asarray(poisson, dtype=float) ** 2))
+
+
+def zone_load(grid: PolarGrid, radii, pressures) -> np.ndarray:
+    """Cell field (Pa, shape (n_r, n_theta)) of concentric pressure zones behind the wafer.
+
+    Zone k presses ``pressures[k]`` (Pa) on R_{k-1} < r < R_k, ``radii`` = (R_1, ..., R_n) in m,
+    R_0 = 0. A ring of cells cut by a zone boundary takes the area-weighted mean of the zones
+    it holds (the exact overlap of the annuli), so the field's integral is the membrane's load
+    sum P_k pi (R_k^2 - R_{k-1}^2) exactly, however the boundaries fall on the grid.
+    """
+    outer = np.asarray(grid.radial_faces[2], dtype=float)[:, 0] / grid.dtheta
+    inner = np.concatenate([[0.0], outer[:-1]])
+    edges = np.concatenate([[0.0], np.asarray(radii, dtype=float)])
+    lo = np.maximum(inner[:, None], edges[None, :-1])
+    hi = np.minimum(outer[:, None], edges[None, 1:])
+    overlap = np.clip(hi * hi - lo * lo, 0.0, None)  # (rings, zones), times pi
+    ring = overlap @ np.asarray(pressures, dtype=float) / (outer * outer - inner * inner)
+    return np.broadcast_to(ring[:, None], (grid.n_r, grid.n_theta)).copy()
 
 
 @dataclass(frozen=True)
