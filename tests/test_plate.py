@@ -117,7 +117,7 @@ def test_zone_load_carries_the_membranes_load_exactly_wherever_the_zone_boundari
     q = zone_load(g, radii, pressures)
     load = sum(p * np.pi * (b * b - a * a) for p, a, b in zip(pressures, (0.0,) + radii[:-1], radii))
     assert g.integrate(q) == pytest.approx(load, rel=1e-14)
-    assert np.all(q[:16] == 2e4)  # zones 1 and 2 end on faces (50 and 100 mm)
+    assert q[:16] == pytest.approx(np.full((16, 16), 2e4), rel=1e-14)  # zones 1 and 2 end on faces (50 and 100 mm)
     last = (2.8e4 * (0.145**2 - 0.14375**2) + 1.4e4 * (0.15**2 - 0.145**2)) / (0.15**2 - 0.14375**2)
     assert q[-1] == pytest.approx(np.full(16, last), rel=1e-14)
     assert 2.4e4 < q[20, 0] < 2.8e4  # ring 20 spans 125-131.25 mm: part of zones 3 and 4
