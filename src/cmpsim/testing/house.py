@@ -22,7 +22,7 @@ __all__ = ["FLOORS", "UTILITIES", "source_modules", "imports_of", "floor_of", "v
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("kernels", "pure vectorised physics, each function an equation of the paper; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "uniformity")),
     ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems; the wafer plate", ("grid", "reynolds", "cavitation", "plate")),
-    ("solver", "force and moment balance of the wafer (Newton), coupled with the pad deflection", ("equilibrium", "compliance")),
+    ("solver", "force and moment balance of the wafer (Newton), coupled with the pad deflection", ("equilibrium", "compliance", "membrane")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
     ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "testing")),
