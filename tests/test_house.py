@@ -22,6 +22,24 @@ def test_importing_any_module_runs_no_import_loop():
     assert import_cycles(SRC) == []
 
 
+def test_units_and_config_do_not_need_each_other():
+    """The parameter registry hands its entries to cmpsim.units; units never imports config,
+    not even inside a function (issue 22: the config <-> units circle)."""
+    cycles = import_cycles(SRC, top_level_only=False)
+    assert not [c for c in cycles if {"cmpsim.units", "cmpsim.config"} & set(c)], cycles
+    assert "cmpsim.config" not in imports_of(SRC / "units.py", "cmpsim.units")
+
+
+def test_the_cycle_check_sees_imports_inside_functions(tmp_path):
+    root = tmp_path / "cmpsim"
+    root.mkdir()
+    (root / "__init__.py").write_text("")
+    (root / "config.py").write_text("from . import units\n")
+    (root / "units.py").write_text("def f():\n    from .config import PARAMETERS\n")
+    assert import_cycles(root) == []
+    assert import_cycles(root, top_level_only=False) == [["cmpsim.config", "cmpsim.units", "cmpsim.config"]]
+
+
 def test_every_room_of_the_table_exists_and_every_module_has_a_floor():
     modules = source_modules(SRC)
     rooms = {n.split(".")[1] if "." in n else n for n in modules}
