@@ -98,6 +98,40 @@ def test_console_script_runs_on_defaults():
     assert json.loads(proc.stdout)["solver"]["converged"] is True
 
 
+#: The one line the command line prints for the warning of a reference case that removes nothing
+#: (a rigid pad with the measured 5 um summits hydroplanes there).
+NAN_WARNING = (
+    "cmpsim: warning: removal_rate_relative is undefined (NaN, null in JSON): the reference case "
+    "(LEP, 4 psi, 60 rpm, d = 100 nm, sigma = reference_roughness) removes nothing\n"
+)
+
+
+def test_console_script_prints_cmpsims_warning_as_one_line_without_the_source_echo():
+    proc = subprocess.run(
+        [sys.executable, "-m", "cmpsim.cli", "run", "--json", "--set", "pad_compliance=rigid", "--grid", "coarse"],
+        capture_output=True, text=True, check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == NAN_WARNING  # not "cli.py:NNN: RuntimeWarning: ...\n  result = solve(cfg, ...)"
+    assert json.loads(proc.stdout)["values"]["removal_rate_relative"] is None
+
+
+def test_the_warning_display_is_the_commands_own_and_restored_after_it():
+    import warnings
+
+    import cmpsim.cli
+
+    before = warnings.showwarning
+    res = CliRunner().invoke(main, ["run", "--json", "--set", "pad_compliance=rigid", "--grid", "coarse"])
+    assert res.exit_code == 0, res.output
+    assert res.stderr == NAN_WARNING
+    assert warnings.showwarning is before  # importing or running the CLI leaves the library's warnings alone
+    # another package's warning keeps Python's format (its source says where it comes from)
+    seen = []
+    cmpsim.cli.show_warning("not ours", UserWarning, "/elsewhere/pkg/mod.py", 7, other=lambda *a: seen.append(a))
+    assert seen == [("not ours", UserWarning, "/elsewhere/pkg/mod.py", 7, None, None)]
+
+
 def test_every_solving_command_takes_its_inputs_the_same_way(tmp_path, monkeypatch):
     """--config, --preset, --set and --grid on run, reproduce, validate and calibrate; `run FILE` is `run --config FILE`."""
     import cmpsim

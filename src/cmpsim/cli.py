@@ -12,7 +12,9 @@ repeatable) and the grid (``--grid``), in that order. ``cmpsim run FILE`` is the
 
 from __future__ import annotations
 
+import functools
 import sys
+import warnings
 from pathlib import Path
 
 import click
@@ -75,10 +77,32 @@ def _rich_table(title, header, rows):
     return t
 
 
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None, other=warnings.showwarning):
+    """``warnings.showwarning`` of the command line: a warning raised in cmpsim's code is one
+    line on stderr, ``cmpsim: warning: <message>``, without Python's file, line and source echo;
+    other packages' warnings go to ``other`` (Python's format: their source says where they come from)."""
+    try:
+        ours = Path(filename).resolve().is_relative_to(_PACKAGE)
+    except (TypeError, ValueError, OSError):
+        ours = False
+    if not ours:
+        other(message, category, filename, lineno, file, line)
+        return
+    text = " ".join(str(message).split())
+    click.echo(f"cmpsim: warning: {text}", err=True)
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="cmpsim")
-def main():
+@click.pass_context
+def main(ctx):
     """cmpsim: wafer-scale CMP simulator (grain-flow lubrication + pad asperity contact)."""
+    # for this command only (restored when it ends): importing cmpsim changes no warning display
+    ctx.with_resource(warnings.catch_warnings())
+    warnings.showwarning = functools.partial(show_warning, other=warnings.showwarning)
 
 
 @main.command()
