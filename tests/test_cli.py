@@ -98,6 +98,13 @@ def test_console_script_runs_on_defaults():
     assert json.loads(proc.stdout)["solver"]["converged"] is True
 
 
+def test_version_is_the_one_written_in_version_py():
+    from cmpsim._version import __version__
+
+    res = CliRunner().invoke(main, ["--version"])
+    assert res.exit_code == 0 and res.output == f"cmpsim, version {__version__}\n"
+
+
 #: The one line the command line prints for the warning of a reference case that removes nothing
 #: (a rigid pad with the measured 5 um summits hydroplanes there).
 NAN_WARNING = (

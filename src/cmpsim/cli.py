@@ -19,6 +19,8 @@ from pathlib import Path
 
 import click
 
+from ._version import __version__
+
 EXIT_INPUT = 2
 EXIT_NO_EQUILIBRIUM = 3
 
@@ -96,7 +98,7 @@ def show_warning(message, category, filename, lineno, file=None, line=None, othe
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(package_name="cmpsim")
+@click.version_option(version=__version__, prog_name="cmpsim")  # the source's version, not an install's metadata
 @click.pass_context
 def main(ctx):
     """cmpsim: wafer-scale CMP simulator (grain-flow lubrication + pad asperity contact)."""
