@@ -139,6 +139,16 @@ def test_the_warning_display_is_the_commands_own_and_restored_after_it():
     assert seen == [("not ours", UserWarning, "/elsewhere/pkg/mod.py", 7, None, None)]
 
 
+def test_the_run_tables_warnings_are_one_line_each_on_stderr():
+    """The hydrodynamic variant of the paper's model equilibrates outside the flow factors' validity
+    (docs/limitations.md): the table goes to stdout, the warning to stderr in the one format."""
+    res = CliRunner().invoke(main, ["run", "--preset", "paper", "--set", "model=hydrodynamic", "--grid", "coarse"])
+    assert res.exit_code == 0, res.output
+    lines = res.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("cmpsim: warning: the flow-factor tensor was regularised on "), res.stderr
+    assert "warning" not in res.stdout.replace("regularised", "")
+
+
 def test_every_solving_command_takes_its_inputs_the_same_way(tmp_path, monkeypatch):
     """--config, --preset, --set and --grid on run, reproduce, validate and calibrate; `run FILE` is `run --config FILE`."""
     import cmpsim

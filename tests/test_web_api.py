@@ -466,7 +466,7 @@ def test_serve_says_where_to_point_the_browser_and_warns_off_loopback(monkeypatc
     monkeypatch.setenv("CMPSIM_TOKEN", "t0k")
     res = CliRunner().invoke(main, ["serve", "--host", "0.0.0.0", "--max-jobs", "3"])
     assert res.exit_code == 0, res.output
-    assert "warning: --host 0.0.0.0" in res.stderr and "?token=t0k" in res.stdout
+    assert "cmpsim: warning: --host 0.0.0.0 makes the server reachable" in res.stderr and "?token=t0k" in res.stdout
     app = calls[-1][0]
     assert app.state.limits.max_jobs == 3
     with TestClient(app) as c:
