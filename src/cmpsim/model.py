@@ -91,7 +91,7 @@ def solve(
     setup = physical_setup(config)
     if problem is None:
         problem = build_problem(config, setup)
-    sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
+    sol = problem.carrier.equilibrium(problem, solve_equilibrium, start=start, tol=config.tolerance, max_iter=config.max_iterations)
     scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
     if relative:
         if reference_removal_rate is None:

@@ -45,6 +45,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 from .grid import PolarGrid
+from .padstack import plate_bending_stiffness
 
 __all__ = ["bending_stiffness", "KirchhoffPlate", "PlateDeflection", "PlateOperator", "zone_load"]
 
@@ -52,9 +53,9 @@ __all__ = ["bending_stiffness", "KirchhoffPlate", "PlateDeflection", "PlateOpera
 def bending_stiffness(thickness, modulus, poisson):
     """Flexural rigidity D = E t^3 / (12 (1 - nu^2)) of a thin plate, N m (t in m, E in Pa).
 
-    Timoshenko & Woinowsky-Krieger (1959), eq. 3.
+    Timoshenko & Woinowsky-Krieger (1959), eq. 3; the kernel :func:`cmpsim.padstack.plate_bending_stiffness`.
     """
-    return np.asarray(modulus, dtype=float) * np.asarray(thickness, dtype=float) ** 3 / (12.0 * (1.0 - np.asarray(poisson, dtype=float) ** 2))
+    return plate_bending_stiffness(thickness, modulus, poisson)
 
 
 def zone_load(grid: PolarGrid, radii, pressures) -> np.ndarray:

@@ -103,11 +103,6 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
     """The :class:`~cmpsim.wafer.WaferProblem` of a Config (``setup`` if already built)."""
     s = setup or physical_setup(config)
     check_geometry(config.dome_height, s.grid.radius)
-    if config.carrier != "rigid":
-        raise ValueError(
-            f"carrier = {config.carrier!r}: the membrane carrier's plate (cmpsim.plate) is not coupled to the equilibrium yet; "
-            "valid value 'rigid' (docs/limitations.md)"
-        )
     return WaferProblem(
         s.grid,
         config.dome_height,
@@ -121,5 +116,5 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
         foundation=s.foundation,
         pad_model=s.pad_model,
         slurry=models.slurry_model(config.slurry_model, config.cavitation, config.cavitation_pressure, s.ambient_pressure),
-        carrier=models.carrier(config.carrier),
+        carrier=models.carrier(config),
     )

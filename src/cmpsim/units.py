@@ -96,19 +96,14 @@ def parse(param, value: Any) -> Any:
     as SI, not re-parsed). Choices and the grid are strings, checked against their options.
     Raises ``ValueError`` naming the parameter and its valid range.
     """
-<<<<<<< HEAD
-    p = _param(name)
-    if p.items:
-        return p.check(parse_list(value, p.unit, name, example=p.display))
-=======
     p = _entry(param)
->>>>>>> main
+    if getattr(p, "items", False):
+        return p.check(parse_list(value, p.unit, p.name, example=p.display))
     if p.choices or p.unit == "grid" or (isinstance(value, (int, float)) and not isinstance(value, bool)):
         return p.check(value)
     return p.check(to_si(value, p.unit, p.name, example=p.display))
 
 
-<<<<<<< HEAD
 def parse_list(value: Any, unit: str, name: str = "value", example: str | None = None) -> tuple[float, ...]:
     """A list input as a tuple of floats in ``unit`` (SI); no range check.
 
@@ -142,14 +137,9 @@ def _is_number(text: str) -> bool:
     return True
 
 
-def to_display(name: str, value: Any) -> Any:
-    """SI value of input ``name`` in its display unit (strings unchanged)."""
-    p = _param(name)
-=======
 def to_display(param, value: Any) -> Any:
     """SI value of the input described by ``param`` (a registry entry) in its display unit (strings unchanged)."""
     p = _entry(param)
->>>>>>> main
     if isinstance(value, str) or not p.display or p.display == p.unit:
         return value
     if isinstance(value, (list, tuple)):
@@ -157,15 +147,9 @@ def to_display(param, value: Any) -> Any:
     return registry().Quantity(value, p.unit).to(p.display).magnitude
 
 
-<<<<<<< HEAD
-def format_display(name: str, value: Any) -> str:
-    """SI value of input ``name`` as display text (6 significant digits)."""
-    v = to_display(name, value)
-    if isinstance(v, tuple):  # a list input: "3, 3.5, 4" ("" when unset)
-        return ", ".join(f"{x:.6g}" for x in v)
-=======
 def format_display(param, value: Any) -> str:
     """SI value of the input described by ``param`` (a registry entry) as display text (6 significant digits)."""
     v = to_display(param, value)
->>>>>>> main
+    if isinstance(v, tuple):  # a list input: "3, 3.5, 4" ("" when unset)
+        return ", ".join(f"{x:.6g}" for x in v)
     return v if isinstance(v, str) else f"{v:.6g}"

@@ -3,8 +3,11 @@
 The paper's carrier holds the wafer as a rigid body (:class:`RigidCarrier`): three unknowns,
 the film thickness h0 at the centre and the two tilts, driven by the balance of the applied
 load and of the moments about the carrier's pivot at the centre of the wafer face
-(eq. 30-31). A carrier that bends the wafer (a membrane head) adds a class here and an entry
-in the registry of :mod:`cmpsim.models`.
+(eq. 30-31). A membrane head (:class:`MembraneCarrier`) presses the wafer through concentric
+pressure zones and lets it bend as a free Kirchhoff plate (:mod:`cmpsim.plate`,
+:mod:`cmpsim.membrane`): the same three rigid-body unknowns and balances, plus the bending,
+found around the rigid-body Newton solve. The carrier also says how its equilibrium is solved
+(:meth:`RigidCarrier.equilibrium`), so the operating point never asks which carrier it has.
 """
 
 from __future__ import annotations
@@ -12,8 +15,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry import film_thickness
+from ..membrane import BendingError, solve_bending
+from ..plate import KirchhoffPlate, zone_load
+from ..state import EquilibriumError
 
-__all__ = ["RigidCarrier"]
+__all__ = ["RigidCarrier", "MembraneCarrier"]
 
 
 class RigidCarrier:
@@ -27,6 +33,16 @@ class RigidCarrier:
 
     name = "rigid"
     unknowns = ("h0", "attack_angle", "cross_tilt")
+
+    @classmethod
+    def from_config(cls, config) -> "RigidCarrier":
+        """The rigid carrier (it takes no inputs beyond ``applied_pressure``, which the problem holds)."""
+        return cls()
+
+    def equilibrium(self, problem, solve, start=None, **options):
+        """The equilibrium of ``problem``: ``solve(problem, start=start, **options)``, Newton on the
+        rigid-body unknowns (:func:`cmpsim.equilibrium.solve_equilibrium`)."""
+        return solve(problem, start=start, **options)
 
     def load(self, applied_pressure: float, radius: float) -> float:
         """Total applied load P_applied pi R_w^2, N."""
@@ -51,3 +67,92 @@ class RigidCarrier:
     def residual_change(self, problem, dp) -> np.ndarray:
         """The change of (R_F, R_y, R_x) under a change dp of the pressure (the residual is affine in p)."""
         return self.residual(problem, dp) + np.array([1.0, 0.0, 0.0])
+
+
+class MembraneCarrier(RigidCarrier):
+    """A multi-zone membrane head pressing a wafer that bends as a free Kirchhoff plate.
+
+    Zone k presses ``pressures[k]`` (Pa) behind the wafer out to ``radii[k]`` (m); the wafer
+    (``plate``: thickness, Young's modulus, Poisson ratio) bends by w under the zone pressures
+    behind and the slurry and pad pressures in front (:mod:`cmpsim.membrane`). The rigid-body
+    unknowns, the load (the zones' total, ``applied_pressure`` being their area mean) and the
+    balances are the rigid carrier's; the film adds the bending:
+
+        h(x, y) = h_rigid(u; x, y) + w(x, y)       (eq. 30 plus the plate's deflection).
+
+    The bending lives on the grid of the first equilibrium solved and is interpolated
+    (:meth:`cmpsim.grid.PolarGrid.interpolate`, second order) to every point the solver asks,
+    on that grid or a coarser one.
+    """
+
+    name = "membrane"
+
+    def __init__(self, radii, pressures, plate: KirchhoffPlate):
+        if len(radii) != len(pressures) or not len(radii):
+            raise ValueError(f"a membrane head needs one pressure per zone; got {len(pressures)} pressures for {len(radii)} zones")
+        self.radii = tuple(float(r) for r in radii)
+        self.pressures = tuple(float(p) for p in pressures)
+        self.plate = plate
+        self.bending = None  # (grid, cell field of w, m) once solved
+        self._interpolation: dict = {}
+        self.bending_solves = 0
+
+    @classmethod
+    def from_config(cls, config) -> "MembraneCarrier":
+        """The membrane head of a Config: ``zone_radii`` / ``zone_pressures`` (or ``applied_pressure`` in
+        every zone), the wafer plate from ``wafer_thickness``, ``wafer_modulus``, ``wafer_poisson``."""
+        return cls(config.zone_outer_radii, config.zone_pressure_values, KirchhoffPlate(config.wafer_thickness, config.wafer_modulus, config.wafer_poisson))
+
+    def _bend(self, x, y) -> np.ndarray:
+        grid, w = self.bending
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        key = (x.shape, hash(x.tobytes()), hash(y.tobytes()))
+        m = self._interpolation.get(key)
+        if m is None:
+            if len(self._interpolation) > 16:
+                self._interpolation.clear()
+            m = self._interpolation[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
+        return (m @ w.ravel()).reshape(x.shape)
+
+    def film(self, problem, u, x, y) -> np.ndarray:
+        """The rigid carrier's film plus the wafer's bending at points (x, y), m."""
+        h = super().film(problem, u, x, y)
+        if self.bending is None:
+            return h
+        return h + self._bend(x, y)
+
+    def back_pressure(self, grid) -> np.ndarray:
+        """The zone pressures behind the wafer as a cell field on ``grid``, Pa (:func:`cmpsim.plate.zone_load`)."""
+        return zone_load(grid, self.radii, self.pressures)
+
+    def equilibrium(self, problem, solve, start=None, **options):
+        """Rigid-body equilibrium of the flat-backed wafer, then the bending found around it
+        (:func:`cmpsim.membrane.solve_bending`): each trial bending is one warm-started ``solve``.
+
+        The load stiffness that preconditions the bending is -d(load)/d(h0) / area at the
+        rigid-body equilibrium (one extra pressure solve). Raises EquilibriumError if the
+        bending does not converge.
+        """
+        grid = problem.grid
+        self.bending = None
+        self._interpolation.clear()
+        sol = solve(problem, start=start, **options)
+        st = sol.state
+        step = 1e-3 * problem.sigma
+        shifted = problem.state(st.u + np.array([step, 0.0, 0.0]))
+        stiffness = -(grid.integrate(shifted.p_total) - grid.integrate(st.p_total)) / (step * grid.integrate(np.ones_like(st.h)))
+        last = {"sol": sol}
+
+        def equilibrium(w):
+            self.bending = (grid, np.array(w, dtype=float, copy=True))
+            last["sol"] = solve(problem, start=last["sol"].state.u, **options)
+            return last["sol"].state
+
+        tol = options.get("tol", 1e-9)
+        try:
+            bent = solve_bending(equilibrium, self.plate, grid, self.back_pressure(grid), stiffness, tol=1e3 * tol * problem.sigma)
+        except BendingError as exc:
+            raise EquilibriumError(f"membrane carrier: {exc}") from exc
+        self.bending = (grid, bent.deflection)
+        self.bending_solves = bent.solves
+        return last["sol"]
