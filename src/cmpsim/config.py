@@ -255,6 +255,11 @@ def _check_carrier(c: "Config") -> None:
     if c.process.carrier != "membrane" and (p.zone_radii or p.zone_pressures):
         name = "zone_pressures" if p.zone_pressures else "zone_radii"
         raise ValueError(f"{name} needs carrier = 'membrane' (got carrier = {p.carrier!r}): a rigid carrier presses with applied_pressure alone")
+    if p.carrier == "membrane" and c.pad.pad_compliance == "rigid":
+        raise ValueError(
+            "carrier = 'membrane' needs a compliant pad: pad_compliance must be 'winkler' or 'layer' (got 'rigid'); "
+            "on a rigid pad the thin wafer's bending over the slurry film has no converged solution in cmpsim (docs/limitations.md)"
+        )
     radius = 0.5 * c.wafer.wafer_diameter
     radii = p.zone_radii
     if radii:
