@@ -48,27 +48,14 @@ import scipy.sparse as sp
 
 from .grid import face_operators as _face_operators
 # the pad stack's kernels moved to cmpsim.padstack; re-exported here, where they were public
-from .padstack import (
-    LayeredFoundation,
-    PadLayer,
-    WinklerFoundation,
-    constrained_modulus,
-    foundation_stiffness,
-    layer_stiffness,
-    plate_bending_stiffness,
-)
+from .padstack import *  # noqa: F403
+from .padstack import __all__ as _PADSTACK
 from .reynolds import FaceCoefficients, assemble_operator, factorize, flux_divergence, lubrication_coefficients
 from .state import EquilibriumError, PressureState
 
 __all__ = [
+    *_PADSTACK,
     "COMPLIANCE_MODELS",
-    "PadLayer",
-    "constrained_modulus",
-    "foundation_stiffness",
-    "WinklerFoundation",
-    "LayeredFoundation",
-    "layer_stiffness",
-    "plate_bending_stiffness",
     "CoupledLinearisation",
     "coupled_state",
     "coupled_jacobian",
