@@ -267,9 +267,9 @@ def _gmres(matvec, b, x0, rtol: float, max_iter: int) -> np.ndarray:
 
     Kept hand-written because the library's is slower on this problem:
     ``scipy.sparse.linalg.gmres(restart=max_iter, maxiter=1)`` (the same algorithm, scipy 1.17)
-    took 1.17-1.24x the time of this function on the Newton systems of the layered pad
+    took 1.16-1.24x the time of this function on the Newton systems of the layered pad
     (``benchmarks/bench_house.py``, 21 systems of one equilibrium at the paper's base case,
-    default grid, best of 7, two runs; the steps agree to 5e-15): its Givens rotations index
+    default grid, best of 5-7, three runs; the steps agree to 5e-15): its Givens rotations index
     the Hessenberg matrix with fancy indexing at every inner step, which costs more than the
     preconditioned mat-vecs of these well-clustered systems (30-100 iterations).
     Raises ValueError if the relative residual is not below ``rtol`` after ``max_iter``.
