@@ -109,3 +109,9 @@ def test_the_registry_refuses_unknown_names_and_inapplicable_cavitation():
         models.slurry_model("granular", "gumbel", -1e4, 3e4)
     with pytest.raises(ValueError, match=r"cavitation_pressure must be a gauge pressure"):
         models.slurry_model("newtonian", "jfo", None, 3e4)
+
+
+def test_no_room_is_over_about_600_lines():
+    """Small modules with one job (issue 22: none over about 600 lines; 650 leaves the 'about')."""
+    long = {name: n for name, path in source_modules(SRC).items() if (n := len(path.read_text(encoding="utf-8").splitlines())) > 650}
+    assert long == {}, long
