@@ -116,7 +116,7 @@ PARAMETERS: dict[str, Param] = {
         _P("zone_pressures", "process", "P_k", "Pa", "psi", (), "Membrane pressure of each zone (one per zone_radii); unset = applied_pressure in every zone. When set, applied_pressure is their area-weighted mean", "The user's recipe (production membrane heads run zones at about 1-8 psi); unset reproduces the uniform load", 0.0, items=True),
         _P("retaining_ring_gap", "process", "g_r", "m", "mm", 1e-3, "Radial gap between the wafer edge and the inner edge of the retaining ring", "Assumption [A]: a ring must hold the wafer with a small clearance; about 1 mm (ring inner diameter ~302 mm for 300 mm wafers). See docs/model.md ('Carrier')", 0.0, None, False),
         _P("retaining_ring_width", "process", "w_r", "m", "mm", 20e-3, "Radial width of the retaining ring's face on the pad", "Assumption [A]: of the order of 20 mm; see docs/model.md ('Carrier')", 0.0),
-        _P("retaining_ring_pressure", "process", "P_r", "Pa", "psi", 0.0, "Pressure of the retaining ring's face on the pad (0 = no ring)", "0 = no ring, the paper's head; the ring load on the laterally coupled pad is not built yet (docs/limitations.md)", 0.0, None, False),
+        _P("retaining_ring_pressure", "process", "P_r", "Pa", "psi", 0.0, "Pressure of the retaining ring's face on the pad (0 = no ring)", "0 = no ring, the paper's head; acts through the laterally coupled pad (pad_compliance = 'layer') only: docs/model.md ('Carrier')", 0.0, None, False),
         _P("rotation_speed", "process", "Omega_p", "rad/s", "rpm", 2 * math.pi, "Pad (relative) rotation speed", "Paper Table 1 (60 rpm; range 30-90 rpm)", 0.0),
         _P("wafer_speed_ratio", "process", "Omega_w/Omega_p", "", "", 1.0, "Wafer over pad rotation speed (1 = uniform relative velocity)", "Assumption: the paper quotes one relative rotation speed; equal speeds as in Thakurta et al. 2001 (60/60 rpm)", 0.0),
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
@@ -276,16 +276,11 @@ def _check_carrier(c: "Config") -> None:
             f"zone_pressures has {len(p.zone_pressures)} values but there are {n_zones} zones "
             f"({'zone_radii = ' + ', '.join(f'{r:g}' for r in radii) + ' m' if radii else 'zone_radii unset: one zone'}); give one pressure per zone"
         )
-    if p.retaining_ring_pressure > 0:
-        if c.pad.pad_compliance != "layer":
-            raise ValueError(
-                f"retaining_ring_pressure = {p.retaining_ring_pressure:g} Pa cannot act on the wafer with pad_compliance = "
-                f"{c.pad.pad_compliance!r}: a local pad carries the ring's load where it presses, not under the wafer. "
-                "Set retaining_ring_pressure = 0, or use pad_compliance = 'layer'"
-            )
+    if p.retaining_ring_pressure > 0 and c.pad.pad_compliance != "layer":
         raise ValueError(
-            f"retaining_ring_pressure = {p.retaining_ring_pressure:g} Pa: the ring's load on the layered pad is not built yet "
-            "(docs/limitations.md); valid value 0 (no ring)"
+            f"retaining_ring_pressure = {p.retaining_ring_pressure:g} Pa cannot act on the wafer with pad_compliance = "
+            f"{c.pad.pad_compliance!r}: a local pad carries the ring's load where it presses, not under the wafer. "
+            "Set retaining_ring_pressure = 0, or use pad_compliance = 'layer' (the laterally coupled pad)"
         )
 
 

@@ -19,7 +19,15 @@ from ..membrane import BendingError, solve_bending
 from ..plate import KirchhoffPlate, zone_load
 from ..state import EquilibriumError
 
-__all__ = ["RigidCarrier", "MembraneCarrier"]
+__all__ = ["RigidCarrier", "MembraneCarrier", "ring_of"]
+
+
+def ring_of(config):
+    """The retaining ring of a Config: (inner radius, outer radius, pressure) in m, m, Pa, or None without ring pressure."""
+    if config.retaining_ring_pressure == 0.0:
+        return None
+    inner = 0.5 * config.wafer_diameter + config.retaining_ring_gap
+    return (inner, inner + config.retaining_ring_width, config.retaining_ring_pressure)
 
 
 class RigidCarrier:
@@ -33,11 +41,34 @@ class RigidCarrier:
 
     name = "rigid"
     unknowns = ("h0", "attack_angle", "cross_tilt")
+    #: Radii of the table of the ring's pad deflection under the wafer (interpolated linearly).
+    RING_TABLE = 1024
+
+    def __init__(self, ring=None):
+        #: The retaining ring: (inner radius, outer radius, pressure) in m, m, Pa, or None.
+        self.ring = None if ring is None or ring[2] == 0.0 else tuple(float(v) for v in ring)
+        self._ring_table = None
 
     @classmethod
     def from_config(cls, config) -> "RigidCarrier":
-        """The rigid carrier (it takes no inputs beyond ``applied_pressure``, which the problem holds)."""
-        return cls()
+        """The rigid carrier with the retaining ring of a Config (``retaining_ring_*``; none at zero pressure)."""
+        return cls(ring=ring_of(config))
+
+    def ring_deflection(self, problem, r) -> np.ndarray:
+        """The pad's deflection (m, away from the wafer) at radii ``r`` under the retaining ring's load.
+
+        The ring presses ``retaining_ring_pressure`` on the annulus from wafer radius + gap to
+        + gap + width; the laterally coupled pad carries it to the wafer's edge
+        (:meth:`cmpsim.padstack.LayeredFoundation.annulus_deflection`, tabulated once).
+        """
+        radius = problem.grid.radius
+        key = (problem.foundation, radius)
+        if self._ring_table is None or self._ring_table[0] != key:
+            inner, outer, pressure = self.ring
+            table_r = np.linspace(0.0, radius * (1.0 + 1e-9), self.RING_TABLE)
+            self._ring_table = (key, table_r, problem.foundation.annulus_deflection(table_r, inner, outer, pressure))
+        _, table_r, table_w = self._ring_table
+        return np.interp(r, table_r, table_w)
 
     def equilibrium(self, problem, solve, start=None, **options):
         """The equilibrium of ``problem``: ``solve(problem, start=start, **options)``, Newton on the
@@ -53,8 +84,12 @@ class RigidCarrier:
         return np.array([sigma, sigma / radius, sigma / radius])
 
     def film(self, problem, u, x, y) -> np.ndarray:
-        """Film thickness over a rigid pad at points (x, y), m (eq. 30: dome, tilts, h0)."""
-        return film_thickness(x, y, u[0], u[1], problem.dome_height, problem.grid.radius, cross_tilt=u[2])
+        """Film thickness over the undeformed pad at points (x, y), m (eq. 30: dome, tilts, h0), plus the
+        pad's deflection under the retaining ring if there is one."""
+        h = film_thickness(x, y, u[0], u[1], problem.dome_height, problem.grid.radius, cross_tilt=u[2])
+        if self.ring is None:
+            return h
+        return h + self.ring_deflection(problem, np.hypot(x, y))
 
     def residual(self, problem, p_total) -> np.ndarray:
         """(R_F, R_y, R_x) of a total normal pressure field on the wafer (gauge, Pa)."""
@@ -87,7 +122,8 @@ class MembraneCarrier(RigidCarrier):
 
     name = "membrane"
 
-    def __init__(self, radii, pressures, plate: KirchhoffPlate):
+    def __init__(self, radii, pressures, plate: KirchhoffPlate, ring=None):
+        super().__init__(ring)
         if len(radii) != len(pressures) or not len(radii):
             raise ValueError(f"a membrane head needs one pressure per zone; got {len(pressures)} pressures for {len(radii)} zones")
         self.radii = tuple(float(r) for r in radii)
@@ -101,7 +137,8 @@ class MembraneCarrier(RigidCarrier):
     def from_config(cls, config) -> "MembraneCarrier":
         """The membrane head of a Config: ``zone_radii`` / ``zone_pressures`` (or ``applied_pressure`` in
         every zone), the wafer plate from ``wafer_thickness``, ``wafer_modulus``, ``wafer_poisson``."""
-        return cls(config.zone_outer_radii, config.zone_pressure_values, KirchhoffPlate(config.wafer_thickness, config.wafer_modulus, config.wafer_poisson))
+        plate = KirchhoffPlate(config.wafer_thickness, config.wafer_modulus, config.wafer_poisson)
+        return cls(config.zone_outer_radii, config.zone_pressure_values, plate, ring=ring_of(config))
 
     def _bend(self, x, y) -> np.ndarray:
         grid, w = self.bending
