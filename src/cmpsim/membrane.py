@@ -23,7 +23,7 @@ of a plate on an elastic foundation); the remaining coupling is taken by Anderso
 (:func:`scipy.optimize.anderson`). A thin wafer bends over ell = (D / k)^(1/4), a few mm, so the
 solve is continued in the bending stiffness: from a stiffness at which ell reaches the wafer
 radius (the wafer nearly rigid, the bending small) down to D by factors of 100, each stage
-starting from the last; a stage that fails is split (factor 10, then 3).
+starting from the last; a stage that fails is split once (factor 10).
 """
 
 from __future__ import annotations
@@ -43,7 +43,7 @@ __all__ = ["BendingSolution", "BendingError", "solve_bending"]
 #: Stages of the continuation in bending stiffness: the first factor tried, and the smallest
 #: before giving up.
 STAGE_FACTOR = 100.0
-MIN_STAGE_FACTOR = 3.0
+MIN_STAGE_FACTOR = 10.0
 
 
 class BendingError(RuntimeError):

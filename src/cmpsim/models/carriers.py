@@ -121,6 +121,8 @@ class MembraneCarrier(RigidCarrier):
     """
 
     name = "membrane"
+    #: Shares of the zones' departure from their mean applied in turn on a cold start (continuation).
+    ZONE_RAMP = (0.0, 0.25, 0.5, 0.75, 1.0)
 
     def __init__(self, radii, pressures, plate: KirchhoffPlate, ring=None):
         super().__init__(ring)
@@ -130,6 +132,8 @@ class MembraneCarrier(RigidCarrier):
         self.pressures = tuple(float(p) for p in pressures)
         self.plate = plate
         self.bending = None  # (grid, cell field of w, m) once solved
+        #: A bending (m, cells of the problem's grid) to start the next equilibrium from (a warm start), or None.
+        self.initial_bending = None
         self._interpolation: dict = {}
         self.bending_solves = 0
 
@@ -163,15 +167,17 @@ class MembraneCarrier(RigidCarrier):
         return zone_load(grid, self.radii, self.pressures)
 
     def equilibrium(self, problem, solve, start=None, **options):
-        """Rigid-body equilibrium of the flat-backed wafer, then the bending found around it
-        (:func:`cmpsim.membrane.solve_bending`): each trial bending is one warm-started ``solve``.
+        """Rigid-body equilibrium of the flat-backed wafer (or of :attr:`initial_bending`, a warm start),
+        then the bending found around it (:func:`cmpsim.membrane.solve_bending`): each trial bending is
+        one warm-started ``solve``.
 
         The load stiffness that preconditions the bending is -d(load)/d(h0) / area at the
         rigid-body equilibrium (one extra pressure solve). Raises EquilibriumError if the
         bending does not converge.
         """
         grid = problem.grid
-        self.bending = None
+        warm = self.initial_bending
+        self.bending = None if warm is None else (grid, np.array(warm, dtype=float).reshape(grid.n_r, grid.n_theta))
         self._interpolation.clear()
         sol = solve(problem, start=start, **options)
         st = sol.state
@@ -185,11 +191,18 @@ class MembraneCarrier(RigidCarrier):
             last["sol"] = solve(problem, start=last["sol"].state.u, **options)
             return last["sol"].state
 
-        tol = options.get("tol", 1e-9)
+        tol = 1e3 * options.get("tol", 1e-9) * problem.sigma
+        target = self.back_pressure(grid)
+        mean = grid.integrate(target) / grid.integrate(np.ones_like(target))
+        # a cold start bends the wafer under uniform zones first, then ramps the zones to theirs
+        ramp = (1.0,) if warm is not None or np.allclose(target, mean, rtol=1e-12, atol=0.0) else self.ZONE_RAMP
+        w, solves = (None if warm is None else self.bending[1]), 0
         try:
-            bent = solve_bending(equilibrium, self.plate, grid, self.back_pressure(grid), stiffness, tol=1e3 * tol * problem.sigma)
+            for share in ramp:
+                bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol=tol, start=w)
+                w, solves = bent.deflection, solves + bent.solves
         except BendingError as exc:
             raise EquilibriumError(f"membrane carrier: {exc}") from exc
-        self.bending = (grid, bent.deflection)
-        self.bending_solves = bent.solves
+        self.bending = (grid, w)
+        self.bending_solves = solves
         return last["sol"]
