@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.optimize import lsq_linear
 
+from . import models
 from .config import Config, zone_mean_pressure
 from .model import build_problem, solve
 from .uniformity import ring_areas_inside, ring_edges, weighted_std_over_mean
@@ -130,7 +131,7 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
     cmpsim.EquilibriumError
         A solve at the start failed.
     """
-    if config.carrier != "membrane":
+    if not models.carrier(config).has_zones:
         raise ValueError(f"tune_zones needs carrier = 'membrane' (zone pressures to tune); got carrier = {config.carrier!r}")
     if keep not in KEEP:
         raise ValueError(f"keep must be one of {KEEP}; got {keep!r}")

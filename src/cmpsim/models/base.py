@@ -139,6 +139,8 @@ class CarrierModel(Protocol):
     name: str
     #: Names of the unknowns u.
     unknowns: tuple
+    #: Whether the carrier presses in zones whose pressures can be tuned.
+    has_zones: bool
 
     def load(self, applied_pressure: float, radius: float) -> float:
         """Total applied load, N."""

@@ -41,6 +41,8 @@ class RigidCarrier:
 
     name = "rigid"
     unknowns = ("h0", "attack_angle", "cross_tilt")
+    #: The carrier presses in zones whose pressures can be tuned (:func:`cmpsim.tune_zones`).
+    has_zones = False
     #: Radii of the table of the ring's pad deflection under the wafer (interpolated linearly).
     RING_TABLE = 1024
 
@@ -121,6 +123,7 @@ class MembraneCarrier(RigidCarrier):
     """
 
     name = "membrane"
+    has_zones = True
     #: Shares of the zones' departure from their mean applied in turn on a cold start (continuation).
     ZONE_RAMP = (0.0, 0.25, 0.5, 0.75, 1.0)
 
