@@ -25,7 +25,7 @@ FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("solver", "force and moment balance of the wafer (Newton), coupled with the pad deflection", ("equilibrium", "compliance")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
-    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "testing")),
+    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.
