@@ -75,12 +75,12 @@ class DieResult:
 
     @property
     def time_to_planarize(self) -> float:
-        """Time (s) by which every cell's step fell below ``planarity`` (copper: in the bulk stage, or its field cleared); inf if not reached."""
+        """Time (s) by which every cell's step falls below ``planarity`` (copper: in the bulk stage, or its field clears), also when later than :attr:`time`."""
         return float(self.evolution.t_planar.max())
 
     @property
     def time_to_clear(self) -> float:
-        """Copper: time (s) by which the barrier has cleared from the field of every cell; oxide: the time to planarize."""
+        """Copper: time (s) by which the barrier clears from the field of every cell (also when later than :attr:`time`); oxide: the time to planarize."""
         return float(self.evolution.t_clear.max())
 
     def regions(self) -> list[dict]:
@@ -211,6 +211,17 @@ def _end_point(ev: DieEvolution) -> float:
     raise ValueError("the die did not reach its end point within 400 polishing steps: check the inputs (contact_height, selectivities)")
 
 
+def _at(ev: DieEvolution, time: float, fresh) -> DieEvolution:
+    """``ev`` advanced to ``time``; a ``fresh()`` one if ``ev`` is already past it, with the event times of ``ev``."""
+    if time >= ev.t:
+        ev.advance_to(time)
+        return ev
+    new = fresh()
+    new.advance_to(time)
+    new.t_planar, new.t_copper_clear, new.t_clear = ev.t_planar.copy(), ev.t_copper_clear.copy(), ev.t_clear.copy()
+    return new
+
+
 def _prepare(layout, config, process, planarization_length, weighting, cell_size, **process_values):
     config = _config(config)
     layout = load_layout(layout, cell_size)
@@ -253,14 +264,13 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
         from ..model import solve
 
         blanket_rate = float(solve(config, relative=False).removal_rate_mean)
-    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius)
-    if time is None:
-        time = _end_point(ev) * (1.0 + process.over_polish)
-    elif not (math.isfinite(time) and time >= 0):
+    if time is not None and not (math.isfinite(time) and time >= 0):
         raise ValueError(f"time must be >= 0 s; got {time!r}")
-    if time < ev.t:  # the end-point search went past the requested time: start again
-        ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius)
-    ev.advance_to(float(time))
+    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius)
+    t_end = _end_point(ev)  # also gives every cell's event times, reached or not by `time`
+    if time is None:
+        time = t_end * (1.0 + process.over_polish)
+    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius))
     return DieResult(layout, process, float(time), float(blanket_rate), w.length, derived, weighting, eff, ev)
 
 
@@ -389,16 +399,15 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     if not np.all(k > 0):
         raise ValueError("the wafer solve removes nothing at some die sites: no blanket rate to polish them")
     k_ref = float(np.max(k))
+    if time is not None and not (math.isfinite(time) and time >= 0):
+        raise ValueError(f"time must be >= 0 s; got {time!r}")
     ev = DieEvolution(layout, process, eff, k_ref, config.asperity_radius)
-    t_end_ref = _end_point(ev)  # the reference (fastest) die's end point
+    t_end_ref = _end_point(ev)  # the reference (fastest) die's end point, and its event times
     if time is None:
         time = t_end_ref * k_ref / float(np.min(k)) * (1.0 + process.over_polish)
-    elif not (math.isfinite(time) and time >= 0):
-        raise ValueError(f"time must be >= 0 s; got {time!r}")
     t_equiv = time * k / k_ref  # each die's time at the reference rate
     order = np.argsort(t_equiv)
-    if t_equiv[order[0]] < ev.t:
-        ev = DieEvolution(layout, process, eff, k_ref, config.asperity_radius)
+    ev = _at(ev, float(t_equiv[order[0]]), lambda: DieEvolution(layout, process, eff, k_ref, config.asperity_radius))
     n = len(x)
     dish, ero, step = np.empty(n), np.empty(n), np.empty(n)
     for i in order:
