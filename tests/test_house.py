@@ -42,3 +42,70 @@ def test_the_rule_catches_an_upward_import(tmp_path):
     found = violations(root)
     assert any(v.startswith("cmpsim.contact is a kernel and imports cmpsim.config") for v in found), found
     assert any(v.startswith("cmpsim.equilibrium imports cmpsim.studies") for v in found), found
+
+
+def test_no_module_outside_the_registry_tests_a_model_option_by_name():
+    """Each model axis is a family of classes picked by name in cmpsim.models (and checked in
+    cmpsim.config); the solver, the Reynolds assembly and the post-processing ask the objects.
+    On b10a4ba this scan found 17 places (issue 22)."""
+    from cmpsim.testing.house import option_name_comparisons
+
+    assert option_name_comparisons(SRC) == []
+
+
+def test_the_option_scan_catches_a_name_test(tmp_path):
+    from cmpsim.testing.house import option_name_comparisons
+
+    root = tmp_path / "cmpsim"
+    root.mkdir()
+    (root / "__init__.py").write_text("")
+    (root / "config.py").write_text("ok = cfg.cavitation == 'jfo'\n")  # config checks its inputs: allowed
+    (root / "equilibrium.py").write_text(
+        "a = problem.cavitation == 'jfo'\n"
+        "b = 'granular' != lub.slurry_model\n"
+        "c = config.removal_law in ('paper', 'shear_power')\n"
+        "d = carrier not in ['rigid']\n"
+        "e = problem.variant == 'hydrodynamic'\n"  # not a model axis of the registry
+        "f = problem.cavitation == other\n"  # not a string
+    )
+    found = option_name_comparisons(root)
+    assert [line.split(":")[1] for line in found] == ["1", "2", "3", "4"], found
+
+
+def test_every_option_value_has_a_class_behind_its_protocol():
+    """The registry covers exactly the values Config accepts, and each class implements its protocol."""
+    from cmpsim import models
+    from cmpsim.config import PARAMETERS, Config
+
+    axes = {
+        "pad_compliance": (models.PAD_MODELS, models.PadModel),
+        "slurry_model": (models.SLURRY_MODELS, None),
+        "cavitation": (models.CAVITATION_MODELS, models.CavitationModel),
+        "removal_law": (models.REMOVAL_LAWS, None),
+        "carrier": (models.CARRIERS, models.CarrierModel),
+    }
+    for option, (registry, protocol) in axes.items():
+        assert set(registry) == set(PARAMETERS[option].choices), option
+        for name, cls in registry.items():
+            assert cls.name == name
+    cfg = Config.default()
+    for name in models.PAD_MODELS:
+        assert isinstance(models.pad_model(cfg.replace(pad_compliance=name)), models.PadModel)
+    for name in models.REMOVAL_LAWS:
+        assert isinstance(models.removal_law(cfg.replace(removal_law=name)), models.RemovalLaw)
+    for cav in models.CAVITATION_MODELS:
+        assert isinstance(models.slurry_model("newtonian", cav, -1e4, 3e4), models.SlurryModel)
+    assert isinstance(models.carrier("rigid"), models.CarrierModel)
+
+
+def test_the_registry_refuses_unknown_names_and_inapplicable_cavitation():
+    import pytest
+
+    from cmpsim import models
+
+    with pytest.raises(ValueError, match=r"carrier must be one of \('rigid',\); got 'membrane'"):
+        models.carrier("membrane")
+    with pytest.raises(ValueError, match="applies to the Newtonian slurry only"):
+        models.slurry_model("granular", "gumbel", -1e4, 3e4)
+    with pytest.raises(ValueError, match=r"cavitation_pressure must be a gauge pressure"):
+        models.slurry_model("newtonian", "jfo", None, 3e4)

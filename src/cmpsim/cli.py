@@ -12,6 +12,7 @@ repeatable) and the grid (``--grid``), in that order. ``cmpsim run FILE`` is the
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
@@ -228,7 +229,12 @@ def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, 
     except SweepError as exc:
         _fail(str(exc))
     except KeyboardInterrupt:
-        sys.exit(130)
+        # The finished points are saved and the cluster closed (or its workers killed) within a
+        # bound by now; exit at once, so that no interpreter-exit hook (Dask closes clusters
+        # at exit) can wait on a worker that is still busy.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
     elapsed = _time.perf_counter() - t0
     for line in summary_lines(ds):
         click.echo(line)
