@@ -1,7 +1,7 @@
 """Time evolution of every cell of a die under a blanket removal rate: oxide, or copper in stages.
 
 Each cell has two levels (:mod:`cmpsim.die.stepheight`), at heights measured from the original
-top of the field oxide:
+top of the field oxide; the film stack (:mod:`cmpsim.die.stacks`) says what they are:
 
 * **oxide** (ILD/STI): level A is the oxide over the lines (local fraction rho, the pattern
   density), level B the oxide over the spaces, ``step_height`` below; both are oxide, removed at
@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .stacks import film_stack
 from .stepheight import advance, rates
 
 __all__ = ["DieEvolution", "contact_heights", "DENSITY_FLOOR"]
@@ -51,48 +52,27 @@ class DieEvolution:
         if not (np.isfinite(blanket_rate) and blanket_rate > 0):
             raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.process = process
+        self.stack = film_stack(process)
         self.rate = float(blanket_rate)
-        rho = layout.density
-        width = layout.widths()
         eff = np.asarray(effective_density, dtype=float)
-        p = process
-        if p.kind == "oxide":
-            self.f_local = rho
-            f_eff = eff
-            with np.errstate(divide="ignore", invalid="ignore"):
-                gap = np.where(rho > 0, width * (1.0 - rho) / rho, np.nan)  # the spaces
-            self.za = np.zeros(rho.shape)
-            self.zb = np.full(rho.shape, -p.step_height)
-        else:
-            self.f_local = 1.0 - rho
-            f_eff = 1.0 - eff
-            gap = width  # the lines
-            top = p.barrier_thickness + p.copper_thickness
-            closed = ~(np.isfinite(width) & (width > 2.0 * p.copper_thickness))
-            self.za = np.full(rho.shape, top)
-            self.zb = np.where(closed, top, top - p.trench_depth)
-        self.f = np.clip(f_eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
-        self.h = contact_heights(gap, p.contact_height, asperity_radius)
+        self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths())
+        self.f = np.clip(eff if eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
+        self.h = contact_heights(gap, process.contact_height, asperity_radius)
         self.za0, self.zb0 = self.za.copy(), self.zb.copy()
         self.t = 0.0
         s0 = np.abs(self.za - self.zb)
-        self.t_planar = np.where(s0 <= p.planarity, 0.0, np.inf)
-        self.t_copper_clear = np.full(rho.shape, np.inf)
-        self.t_clear = np.full(rho.shape, np.inf) if p.kind == "copper" else self.t_planar.copy()
+        self.t_planar = np.where(s0 <= process.planarity, 0.0, np.inf)
+        self.t_copper_clear = np.full(self.za.shape, np.inf)
+        # the end point: cleared (a metal stack), planarized (oxide)
+        self.t_clear = np.full(self.za.shape, np.inf) if self.stack.metal else self.t_planar.copy()
 
     # ------------------------------------------------------------------ materials
     def _field_rate(self, za):
-        p = self.process
-        if p.kind == "oxide":
-            return np.full(za.shape, self.rate)
-        return self.rate * np.where(za > p.barrier_thickness, 1.0, np.where(za > 0.0, p.barrier_selectivity, p.oxide_selectivity))
+        return self.stack.field_rate(za, self.rate)
 
     def _boundary(self, za):
         """The height at which the field changes material next (-inf: none)."""
-        if self.process.kind == "oxide":
-            return np.full(za.shape, -np.inf)
-        tb = self.process.barrier_thickness
-        return np.where(za > tb, tb, np.where(za > 0.0, 0.0, -np.inf))
+        return self.stack.boundary(za)
 
     def rates(self, za=None, zb=None):
         """Removal rates (R_A, R_B) of the two levels at a state (default: now), m/s."""
@@ -143,7 +123,6 @@ class DieEvolution:
         dt_total = time - self.t
         if dt_total == 0:
             return
-        p = self.process
         left = np.full(self.za.shape, dt_total)
         for _ in range(4):  # at most two material changes per cell and step, plus the rest
             idx = np.nonzero(left > 0)
@@ -169,7 +148,7 @@ class DieEvolution:
                 a1[cross], b1[cross] = np.minimum(ac, bc), bcz
             elapsed = dt_total - dt  # time already polished in this call before the segment
             self._planarity_events(idx, (za, zb, f, h, ka, kb), a1, b1, t_seg, elapsed)
-            if p.kind == "copper" and cross.any():
+            if self.stack.metal and cross.any():
                 when = self.t + elapsed[cross] + t_seg[cross]
                 sub = tuple(i[cross] for i in idx)
                 cu = bound[cross] > 0  # the copper/barrier interface was reached
@@ -185,9 +164,7 @@ class DieEvolution:
     def _planarity_events(self, idx, state, a1, b1, t_seg, elapsed):
         p = self.process
         za, zb = state[0], state[1]
-        open_ = np.isinf(self.t_planar[idx])
-        if p.kind == "copper":
-            open_ &= za > p.barrier_thickness  # only the bulk copper stage
+        open_ = np.isinf(self.t_planar[idx]) & self.stack.planarizing(za)
         s0, s1 = np.abs(za - zb), np.abs(a1 - b1)
         hit = open_ & (s0 > p.planarity) & (s1 <= p.planarity)
         if not hit.any():
@@ -203,7 +180,7 @@ class DieEvolution:
 
         tp, _, _ = self._newton(st, None, g, dg, t_seg[hit])
         self.t_planar[tuple(i[hit] for i in idx)] = self.t + elapsed[hit] + tp
-        if p.kind == "oxide":
+        if not self.stack.metal:
             self.t_clear[tuple(i[hit] for i in idx)] = self.t + elapsed[hit] + tp
 
     # ------------------------------------------------------------------ outputs
@@ -216,16 +193,16 @@ class DieEvolution:
     @property
     def dishing(self) -> np.ndarray:
         """Copper: depth of the line below the field where the field copper has cleared (m); NaN without lines or for oxide."""
-        if self.process.kind == "oxide":
+        if not self.stack.metal:
             return np.full(self.za.shape, np.nan)
         lines = self.f_local < 1.0
-        cleared = self.za <= self.process.barrier_thickness
+        cleared = ~self.stack.planarizing(self.za)
         return np.where(lines, np.where(cleared, self.za - self.zb, 0.0), np.nan)
 
     @property
     def erosion(self) -> np.ndarray:
         """Copper: field oxide lost below its original top (m); NaN for oxide."""
-        if self.process.kind == "oxide":
+        if not self.stack.metal:
             return np.full(self.za.shape, np.nan)
         return np.maximum(-self.za, 0.0)
 

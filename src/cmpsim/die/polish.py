@@ -103,7 +103,7 @@ class DieResult:
                     "dishing": _finite(float(ev.dishing[iy, ix])),
                     "erosion": _finite(float(ev.erosion[iy, ix])),
                     "time_to_planarize": _finite(float(ev.t_planar[iy, ix])),
-                    "time_to_clear": _finite(float(ev.t_clear[iy, ix])) if self.process.kind == "copper" else None,
+                    "time_to_clear": _finite(float(ev.t_clear[iy, ix])) if ev.stack.metal else None,
                 }
             )
         return out
@@ -120,7 +120,7 @@ class DieResult:
             "planarization_length_from_pad": self.planarization_length_from_pad,
             "weighting": self.weighting,
             "time_to_planarize": _finite(self.time_to_planarize),
-            "time_to_clear": _finite(self.time_to_clear) if self.process.kind == "copper" else None,
+            "time_to_clear": _finite(self.time_to_clear) if ev.stack.metal else None,
             "step_height_max": _finite(float(np.nanmax(ev.step_height))) if np.isfinite(ev.step_height).any() else None,
             "dishing_max": _max(ev.dishing),
             "erosion_max": _max(ev.erosion),
@@ -174,7 +174,7 @@ class DieResult:
         x, y = self.layout.coordinates()
         ext = [0, x[-1] + x[0], 0, y[-1] + y[0]]
         ext = [v * 1e3 for v in ext]
-        last = ("dishing", ev.dishing) if self.process.kind == "copper" else ("step height", ev.step_height)
+        last = ("dishing", ev.dishing) if ev.stack.metal else ("step height", ev.step_height)
         panels = [("local density", self.layout.density, "1"), ("effective density", self.effective_density, "1"),
                   ("mean surface height", ev.mean_height * 1e9, "nm"), (last[0], last[1] * 1e9, "nm")]
         fig, axes = plt.subplots(2, 2, figsize=(10, 8.4), layout="constrained")
@@ -200,9 +200,7 @@ _UNITS = {"time": "s", "blanket_rate": "m s-1", "planarization_length": "m", "pl
 
 def _end_point(ev: DieEvolution) -> float:
     """Polish until every cell has planarized (oxide) or cleared (copper); return that time (s)."""
-    p = ev.process
-    depth = p.step_height if p.kind == "oxide" else p.copper_thickness + p.barrier_thickness / p.barrier_selectivity
-    chunk = max(depth / ev.rate, 1e-9) * 0.25
+    chunk = max(ev.stack.end_depth() / ev.rate, 1e-9) * 0.25
     for _ in range(400):
         if np.all(np.isfinite(ev.t_clear)):
             return float(ev.t_clear.max())
@@ -358,7 +356,7 @@ class WaferDies:
 
         wx, wy = self.die.layout.size
         radius = 0.5 * self.result.config.wafer_diameter * 1e3
-        first = ("dishing_max", self.dishing_max, "nm", 1e9) if self.die.process.kind == "copper" else ("step_height_max", self.step_height_max, "nm", 1e9)
+        first = ("dishing_max", self.dishing_max, "nm", 1e9) if self.die.evolution.stack.metal else ("step_height_max", self.step_height_max, "nm", 1e9)
         panels = [first, ("erosion_max", self.erosion_max, "nm", 1e9), ("time_to_clear", self.time_to_clear, "s", 1.0)]
         fig, axes = plt.subplots(1, 3, figsize=(15, 4.8), layout="constrained")
         for ax, (name, values, unit, scale) in zip(axes, panels):
@@ -412,10 +410,7 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     dish, ero, step = np.empty(n), np.empty(n), np.empty(n)
     for i in order:
         ev.advance_to(float(t_equiv[i]))
-        dish[i], ero[i] = _max(ev.dishing) or np.nan, _max(ev.erosion) or np.nan
-        step[i] = _max(ev.step_height) or np.nan
-    if process.kind == "oxide":
-        dish[:], ero[:] = np.nan, np.nan
+        dish[i], ero[i], step[i] = (np.nan if v is None else v for v in (_max(ev.dishing), _max(ev.erosion), _max(ev.step_height)))
     # event times scale back with the rate; events after the reference die's last time are not known
     tc = ev.t_clear.max() * k_ref / k
     tp = ev.t_planar.max() * k_ref / k

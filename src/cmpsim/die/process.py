@@ -10,11 +10,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 
+from .stacks import STACKS
+
 __all__ = ["DieProcess", "DIE_PARAMETERS", "PROCESSES"]
 
-#: The processes: oxide inter-level dielectric (ILD/STI-like: one material, two levels) and
-#: copper damascene (copper overburden on a barrier over oxide with copper lines).
-PROCESSES = ("oxide", "copper")
+#: The processes (film stacks, :data:`cmpsim.die.stacks.STACKS`): oxide inter-level dielectric
+#: (ILD/STI-like: one material, two levels) and copper damascene (copper overburden on a barrier
+#: over oxide with copper lines).
+PROCESSES = tuple(STACKS)
 
 #: name -> (SI unit, default, (low, high) closed range, meaning, source)
 DIE_PARAMETERS: dict[str, tuple[str, float, tuple[float, float], str, str]] = {
