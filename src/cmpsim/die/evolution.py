@@ -85,8 +85,9 @@ class DieEvolution:
     def _newton(state, dt, g, dg, t_max):
         """Time in [0, t_max] where g(advance(state, t), cells) = 0 (g decreasing, g(0) > 0 >= g(t_max)).
 
-        Safeguarded Newton (bisection when a step leaves the bracket), from the first-order
-        estimate; each cell stops when its step is below 1e-12 of t_max.
+        Safeguarded Newton (clipped to the bracket, bisection when a step leaves it far), from the
+        first-order estimate; each cell stops when its step is below 1e-12 of t_max or
+        |g| <= 1e-18 m.
         """
         za, zb, f, h, ka, kb = state
         lo, hi = np.zeros_like(t_max), t_max.copy()
@@ -108,9 +109,12 @@ class DieEvolution:
             slope = dg(a, b, *sub[2:])
             with np.errstate(divide="ignore", invalid="ignore"):
                 nxt = ta - val / slope
-            bad = ~np.isfinite(nxt) | (nxt <= tl) | (nxt >= th)
-            nxt = np.where(bad, 0.5 * (tl + th), nxt)
-            done = (np.abs(nxt - ta) <= 1e-12 * t_max[active]) | (th - tl <= 1e-12 * t_max[active])
+            # a step beyond the bracket is cut back to its end (the root may sit on it), one
+            # that leaves it far is replaced by bisection
+            nxt = np.where(np.isfinite(nxt), nxt, 0.5 * (tl + th))
+            far = (nxt < tl - (th - tl)) | (nxt > th + (th - tl))
+            nxt = np.where(far, 0.5 * (tl + th), np.clip(nxt, tl, th))
+            done = (np.abs(nxt - ta) <= 1e-12 * t_max[active]) | (th - tl <= 1e-12 * t_max[active]) | (np.abs(val) <= 1e-18)
             lo[active], hi[active], t[active] = tl, th, nxt
             active = active[~done]
         a, b = advance(za, zb, f, h, ka, kb, t)
