@@ -282,3 +282,28 @@ def test_die_command_lists_the_built_in_dies_and_refuses_bad_input():
     assert bad.exit_code == 2 and "built-in die" in bad.output and "Traceback" not in bad.output
     bad = CliRunner().invoke(main, ["die", "uniform", "--time", "-3 s", "--blanket-rate", "100nm/min"])
     assert bad.exit_code == 2 and "time must be >= 0" in bad.output
+
+
+def test_pad_weighting_keeps_the_mean_density_and_smooths_a_step():
+    c = cmpsim.Config.default()
+    lay = die.builtin_layout("step", 100e-6)
+    res = die.simulate(lay, 0.0, config=c, blanket_rate=K, weighting="pad")
+    eff = res.effective_density
+    assert abs(eff.mean() - lay.density.mean()) < 1e-12
+    assert eff[:, :50].mean() > 0.2 and eff[:, 50:].mean() < 0.8  # the pad averages across the step
+    assert res.planarization_length == pytest.approx(die.planarization_length_from_pad(c))
+    with pytest.raises(ValueError, match="weighting"):
+        die.simulate(lay, 0.0, config=c, blanket_rate=K, weighting="square")
+
+
+def test_a_user_planarization_length_replaces_the_derived_one_and_both_are_reported():
+    from click.testing import CliRunner
+
+    from cmpsim.cli import main
+
+    res = CliRunner().invoke(main, ["die", "uniform", "--json", "--time", "1 min", "--blanket-rate", "100 nm/min", "--planarization-length", "3 mm"])
+    assert res.exit_code == 0, res.output
+    data = json.loads(res.stdout)
+    assert data["planarization_length"] == pytest.approx(3e-3)
+    assert data["planarization_length_from_pad"] == pytest.approx(die.planarization_length_from_pad(cmpsim.Config.default()))
+    assert data["time"] == pytest.approx(60.0) and data["blanket_rate"] == pytest.approx(100e-9 / 60)
