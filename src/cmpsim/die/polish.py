@@ -386,6 +386,8 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     (:func:`die_sites`, die size = layout size). ``time`` (s) defaults to the end point of the
     slowest die times 1 + ``over_polish``. Other arguments as :func:`simulate`.
     """
+    if result is not None and config is not None and config.to_dict() != result.config.to_dict():
+        raise ValueError("give config or the result of its solve, not a result of other inputs: the dies take the pad and the wafer from result.config")
     config, layout, process, w, derived, eff = _prepare(layout, config if result is None else result.config, process,
                                                         planarization_length, weighting, cell_size, **process_values)
     if result is None:
