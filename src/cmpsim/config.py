@@ -28,6 +28,7 @@ __all__ = [
     "Numerics",
     "Config",
     "parse_value",
+    "parameter",
     "parameter_table_markdown",
     "GRID_PRESETS",
     "PRESETS",
@@ -83,8 +84,8 @@ class Param:
         """Human-readable valid range, in the display unit (``cmpsim params``)."""
         if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
             return self.range_text()
-        lo = "-inf" if self.low is None else f"{to_display(self.name, self.low):.6g}"
-        hi = "inf" if self.high is None else f"{to_display(self.name, self.high):.6g}"
+        lo = "-inf" if self.low is None else f"{units.to_display(self, self.low):.6g}"
+        hi = "inf" if self.high is None else f"{units.to_display(self, self.high):.6g}"
         lb = "(" if (self.low is None or self.low_open) else "["
         hb = ")" if (self.high is None or self.high_open) else "]"
         return f"{lb}{lo}, {hi}{hb} {self.display}"
@@ -242,13 +243,20 @@ def _parse_grid(value: Any) -> str:
     return f"{nr}x{nt}"
 
 
+def parameter(name: str) -> Param:
+    """The registry entry of input ``name``; ``ValueError`` listing the known names if there is none."""
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+    return PARAMETERS[name]
+
+
 def parse_value(name: str, value: Any) -> Any:
     """Convert one input to its SI value, checking unit dimension and range (:func:`cmpsim.units.parse`).
 
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number
     (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
     """
-    return units.parse(name, value)
+    return units.parse(parameter(name), value)
 
 
 def _section_fields(section: str) -> list[str]:
@@ -403,12 +411,12 @@ class Config:
 
 def to_display(name: str, value: Any) -> Any:
     """SI value of a parameter converted to its display unit (strings unchanged; :func:`cmpsim.units.to_display`)."""
-    return units.to_display(name, value)
+    return units.to_display(parameter(name), value)
 
 
 def format_display(name: str, value: Any) -> str:
     """SI value of a parameter as display text (:func:`cmpsim.units.format_display`)."""
-    return units.format_display(name, value)
+    return units.format_display(parameter(name), value)
 
 
 def parameter_table_markdown() -> str:

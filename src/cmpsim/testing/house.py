@@ -119,10 +119,12 @@ def violations(root: Path) -> list[str]:
     return out
 
 
-def import_cycles(root: Path) -> list[list[str]]:
-    """Cycles of the imports run when modules are imported (top-level imports only)."""
+def import_cycles(root: Path, top_level_only: bool = True) -> list[list[str]]:
+    """Cycles of the imports run when modules are imported (top-level imports only), or with
+    ``top_level_only=False`` of every import, also those inside functions (two modules that
+    need each other, whichever waits until a call)."""
     modules = source_modules(root)
-    graph = {n: {_target(i, modules) for i in imports_of(p, n, top_level_only=True)} & set(modules) - {n} for n, p in modules.items()}
+    graph = {n: {_target(i, modules) for i in imports_of(p, n, top_level_only=top_level_only)} & set(modules) - {n} for n, p in modules.items()}
     cycles, state = [], {}
 
     def visit(node, stack):
@@ -146,7 +148,7 @@ def import_cycles(root: Path) -> list[list[str]]:
 MODEL_OPTIONS = ("pad_compliance", "slurry_model", "cavitation", "removal_law", "carrier", "removal_kinetics", "abrasive", "film")
 #: The modules allowed to read an option's name: where the inputs are checked and where the
 #: models are picked by name (the registry).
-OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models", "cmpsim.models.registry")
+OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models")
 
 
 def _option_ref(node: ast.AST) -> bool:
