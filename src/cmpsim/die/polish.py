@@ -131,39 +131,18 @@ class DieResult:
 
     def dataset(self):
         """The die maps as an ``xarray.Dataset`` on x, y (m) with CF attributes (units, long_name)."""
-        import xarray as xr
-
-        from .._version import __version__
-
         ev = self.evolution
         x, y = self.layout.coordinates()
-        maps = {
-            "density": (self.layout.density, "1", "local pattern density (area fraction of the lines)"),
-            "effective_density": (self.effective_density, "1", "effective pattern density seen by the pad"),
-            "line_width": (self.layout.widths(), "m", "line width"),
-            "upper_height": (ev.za, "m", "height of level A (oxide: over the lines; copper: the field) above the original field oxide top"),
-            "lower_height": (ev.zb, "m", "height of level B (oxide: over the spaces; copper: the lines) above the original field oxide top"),
-            "mean_height": (ev.mean_height, "m", "area-weighted mean surface height of the cell"),
-            "step_height": (ev.step_height, "m", "step height between the two levels"),
-            "dishing": (ev.dishing, "m", "copper dishing: depth of the line below the cleared field"),
-            "erosion": (ev.erosion, "m", "field oxide lost below its original top"),
-            "time_to_planarize": (np.where(np.isfinite(ev.t_planar), ev.t_planar, np.nan), "s", "time at which the cell's step fell below the planarity threshold"),
-            "time_to_clear": (np.where(np.isfinite(ev.t_clear), ev.t_clear, np.nan), "s", "time at which the cell cleared (copper: barrier off the field)"),
-        }
-        ds = xr.Dataset(
-            {k: (("y", "x"), v, {"units": u, "long_name": n}) for k, (v, u, n) in maps.items()},
-            coords={"x": ("x", x, {"units": "m", "long_name": "position on the die", "axis": "X"}),
-                    "y": ("y", y, {"units": "m", "long_name": "position on the die", "axis": "Y"})},
-        )
-        for name, value, unit, long in (
-            ("time", self.time, "s", "polishing time"),
-            ("blanket_rate", self.blanket_rate, "m s-1", "blanket removal rate of the die"),
-            ("planarization_length", self.planarization_length, "m", "planarization length used"),
-            ("planarization_length_from_pad", self.planarization_length_from_pad, "m", "planarization length derived from the pad stack"),
-        ):
-            ds[name] = ((), value, {"units": unit, "long_name": long})
-        ds.attrs.update(Conventions="CF-1.11", title=f"cmpsim die: {self.layout.name}, {self.process.kind}", source=f"cmpsim {__version__}",
-                        references="Stine et al., IEEE TSM 11, 129 (1998); Ouma et al., IEEE TSM 15, 232 (2002); docs/model.md section 18")
+        finite = {"time_to_planarize": ev.t_planar, "time_to_clear": ev.t_clear}
+        maps = {"density": self.layout.density, "effective_density": self.effective_density, "line_width": self.layout.widths(),
+                "upper_height": ev.za, "lower_height": ev.zb, "mean_height": ev.mean_height, "step_height": ev.step_height,
+                "dishing": ev.dishing, "erosion": ev.erosion, **{k: np.where(np.isfinite(v), v, np.nan) for k, v in finite.items()}}
+        coords = {"x": ("x", x, {"units": "m", "long_name": "position on the die", "axis": "X"}),
+                  "y": ("y", y, {"units": "m", "long_name": "position on the die", "axis": "Y"})}
+        scalars = {"time": self.time, "blanket_rate": self.blanket_rate, "planarization_length": self.planarization_length,
+                   "planarization_length_from_pad": self.planarization_length_from_pad}
+        ds = _cf_dataset(("y", "x"), maps, MAP_OUTPUTS, scalars, coords, f"cmpsim die: {self.layout.name}, {self.process.kind}")
+        ds.attrs["references"] = "Stine et al., IEEE TSM 11, 129 (1998); Ouma et al., IEEE TSM 15, 232 (2002); docs/model.md section 18"
         return ds
 
     def plot(self):
@@ -189,13 +168,62 @@ class DieResult:
         return fig
 
 
+def _cf_dataset(dims, arrays, table, scalars, coords, title):
+    """An xarray Dataset of arrays on ``dims`` and 0-d scalars, with ``units`` and ``long_name`` from ``table`` or :data:`SCALAR_OUTPUTS`."""
+    import xarray as xr
+
+    from .._version import __version__
+
+    def attrs(name):
+        unit, long = table.get(name) or SCALAR_OUTPUTS[name]
+        return {"units": unit, "long_name": long}
+
+    ds = xr.Dataset({k: (dims, np.asarray(v, dtype=float), attrs(k)) for k, v in arrays.items()}, coords=coords)
+    for k, v in scalars.items():
+        ds[k] = ((), float(v), attrs(k))
+    ds.attrs.update(Conventions="CF-1.11", title=title, source=f"cmpsim {__version__}")
+    return ds
+
+
 def _max(a):
     return float(np.nanmax(a)) if np.isfinite(a).any() else None
 
 
-_UNITS = {"time": "s", "blanket_rate": "m s-1", "planarization_length": "m", "planarization_length_from_pad": "m", "time_to_planarize": "s",
-          "time_to_clear": "s", "step_height": "m", "dishing": "m", "erosion": "m", "density": "1", "line_width": "m", "pitch": "m",
-          "x": "m", "y": "m", "effective_density": "1", "dishing_max": "m", "erosion_max": "m", "step_height_max": "m"}
+#: The die maps of :meth:`DieResult.dataset`: name -> (SI unit, long name).
+MAP_OUTPUTS = {
+    "density": ("1", "local pattern density (area fraction of the lines)"),
+    "effective_density": ("1", "effective pattern density seen by the pad"),
+    "line_width": ("m", "line width"),
+    "upper_height": ("m", "height of level A (oxide: over the lines; copper: the field) above the original field oxide top"),
+    "lower_height": ("m", "height of level B (oxide: over the spaces; copper: the lines) above the original field oxide top"),
+    "mean_height": ("m", "area-weighted mean surface height of the cell"),
+    "step_height": ("m", "step height between the two levels"),
+    "dishing": ("m", "copper dishing: depth of the line below the cleared field"),
+    "erosion": ("m", "field oxide lost below its original top"),
+    "time_to_planarize": ("s", "time at which the cell's step fell below the planarity threshold"),
+    "time_to_clear": ("s", "time at which the cell cleared (copper: barrier off the field)"),
+}
+#: The scalars of a die run: name -> (SI unit, long name).
+SCALAR_OUTPUTS = {
+    "time": ("s", "polishing time"),
+    "blanket_rate": ("m s-1", "blanket removal rate of the die"),
+    "planarization_length": ("m", "planarization length used"),
+    "planarization_length_from_pad": ("m", "planarization length derived from the pad stack"),
+}
+#: The per-die outputs of :meth:`WaferDies.dataset`: name -> (SI unit, long name).
+WAFER_OUTPUTS = {
+    "x": ("m", "die centre, x"),
+    "y": ("m", "die centre, y"),
+    "blanket_rate": ("m s-1", "rotation-averaged blanket removal rate at the die centre"),
+    "time_to_clear": ("s", "time to clear the die (copper: barrier off every field; oxide: planarized)"),
+    "time_to_planarize": ("s", "time by which every cell of the die planarized"),
+    "dishing_max": ("m", "largest copper dishing on the die"),
+    "erosion_max": ("m", "largest oxide erosion on the die"),
+    "step_height_max": ("m", "largest step height on the die"),
+}
+
+#: The unit of every key of the JSON of a die run (``"units"`` of :meth:`DieResult.to_dict`).
+_UNITS = {k: unit for table in (MAP_OUTPUTS, SCALAR_OUTPUTS, WAFER_OUTPUTS) for k, (unit, _) in table.items()} | {"pitch": "m", "wafer_diameter": "m"}
 
 
 def _end_point(ev: DieEvolution) -> float:
@@ -330,23 +358,9 @@ class WaferDies:
 
     def dataset(self):
         """The dies as an ``xarray.Dataset`` on the ``die`` dimension (CF attributes)."""
-        import xarray as xr
-
-        from .._version import __version__
-
-        vars_ = {
-            "x": (self.x, "m", "die centre, x"), "y": (self.y, "m", "die centre, y"),
-            "blanket_rate": (self.blanket_rate, "m s-1", "rotation-averaged blanket removal rate at the die centre"),
-            "time_to_clear": (self.time_to_clear, "s", "time to clear the die (copper: barrier off every field; oxide: planarized)"),
-            "time_to_planarize": (self.time_to_planarize, "s", "time by which every cell of the die planarized"),
-            "dishing_max": (self.dishing_max, "m", "largest copper dishing on the die"),
-            "erosion_max": (self.erosion_max, "m", "largest oxide erosion on the die"),
-            "step_height_max": (self.step_height_max, "m", "largest step height on the die"),
-        }
-        ds = xr.Dataset({k: (("die",), np.asarray(v, dtype=float), {"units": u, "long_name": n}) for k, (v, u, n) in vars_.items()})
-        ds["time"] = ((), self.time, {"units": "s", "long_name": "polishing time"})
-        ds.attrs.update(Conventions="CF-1.11", title=f"cmpsim die --wafer: {self.die.layout.name}, {self.die.process.kind}", source=f"cmpsim {__version__}")
-        return ds
+        vars_ = {name: getattr(self, name) for name in WAFER_OUTPUTS}
+        return _cf_dataset(("die",), vars_, WAFER_OUTPUTS, {"time": self.time}, {},
+                           f"cmpsim die --wafer: {self.die.layout.name}, {self.die.process.kind}")
 
     def plot(self):
         """Wafer maps of per-die dishing (or step height), erosion and time to clear. A matplotlib Figure."""
