@@ -537,13 +537,14 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
             for r in d["regions"]]
     console.print(_rich_table(f"die {die.layout.name!r} ({die.process.kind}) after {d['time']:.1f} s", ["region", "density", "line width", "eff. density", "step height", "dishing", "erosion"], rows))
     console.print(f"planarization length {d['planarization_length'] * 1e3:.3g} mm (from the pad stack: {d['planarization_length_from_pad'] * 1e3:.3g} mm); "
-                  f"blanket rate {die.blanket_rate * 6e10:.4g} nm/min; time to planarize {um(d['time_to_planarize'], 1, 's')}; "
-                  f"time to clear {um(d['time_to_clear'], 1, 's')}", highlight=False)
+                  f"blanket rate {die.blanket_rate * 6e10:.4g} nm/min; time to planarize {um(d['time_to_planarize'], 1, 's')}"
+                  + (f"; time to clear {um(d['time_to_clear'], 1, 's')}" if d["time_to_clear"] is not None else ""), highlight=False)
     if wafer:
         import numpy as np
 
+        end = ("clear", result.time_to_clear) if d["time_to_clear"] is not None else ("planarize", result.time_to_planarize)
         console.print(f"{len(result.x)} dies; blanket rate {np.min(result.blanket_rate) * 6e10:.4g}-{np.max(result.blanket_rate) * 6e10:.4g} nm/min; "
-                      f"time to clear {np.nanmin(result.time_to_clear):.1f}-{np.nanmax(result.time_to_clear):.1f} s", highlight=False)
+                      f"time to {end[0]} {np.nanmin(end[1]):.1f}-{np.nanmax(end[1]):.1f} s", highlight=False)
     if out_dir:
         console.print("wrote " + ", ".join(str(p) for p in written), highlight=False)
 

@@ -363,16 +363,18 @@ class WaferDies:
                            f"cmpsim die --wafer: {self.die.layout.name}, {self.die.process.kind}")
 
     def plot(self):
-        """Wafer maps of per-die dishing (or step height), erosion and time to clear. A matplotlib Figure."""
+        """Wafer maps per die: dishing, erosion and time to clear (copper); step height and time to planarize (oxide). A matplotlib Figure."""
         import matplotlib.pyplot as plt
         from matplotlib.collections import PatchCollection
         from matplotlib.patches import Circle, Rectangle
 
         wx, wy = self.die.layout.size
         radius = 0.5 * self.result.config.wafer_diameter * 1e3
-        first = ("dishing_max", self.dishing_max, "nm", 1e9) if self.die.evolution.stack.metal else ("step_height_max", self.step_height_max, "nm", 1e9)
-        panels = [first, ("erosion_max", self.erosion_max, "nm", 1e9), ("time_to_clear", self.time_to_clear, "s", 1.0)]
-        fig, axes = plt.subplots(1, 3, figsize=(15, 4.8), layout="constrained")
+        if self.die.evolution.stack.metal:
+            panels = [("dishing_max", self.dishing_max, "nm", 1e9), ("erosion_max", self.erosion_max, "nm", 1e9), ("time_to_clear", self.time_to_clear, "s", 1.0)]
+        else:  # oxide: no dishing or erosion; its end point is planarity
+            panels = [("step_height_max", self.step_height_max, "nm", 1e9), ("time_to_planarize", self.time_to_planarize, "s", 1.0)]
+        fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4.8), layout="constrained")
         for ax, (name, values, unit, scale) in zip(axes, panels):
             rects = [Rectangle(((a - 0.5 * wx) * 1e3, (b - 0.5 * wy) * 1e3), wx * 1e3, wy * 1e3) for a, b in zip(self.x, self.y)]
             pc = PatchCollection(rects, cmap="viridis", edgecolor="white", linewidth=0.3)
