@@ -307,3 +307,12 @@ def test_a_user_planarization_length_replaces_the_derived_one_and_both_are_repor
     assert data["planarization_length"] == pytest.approx(3e-3)
     assert data["planarization_length_from_pad"] == pytest.approx(die.planarization_length_from_pad(cmpsim.Config.default()))
     assert data["time"] == pytest.approx(60.0) and data["blanket_rate"] == pytest.approx(100e-9 / 60)
+
+
+def test_an_oxide_wafer_reports_planarization_and_no_dishing(wafer_result):
+    w = die.simulate_wafer(die.builtin_layout("density", 1e-3), result=wafer_result)
+    d = w.to_dict()
+    assert all(x["dishing_max"] is None and x["erosion_max"] is None for x in d["dies"])
+    assert np.allclose(w.time_to_clear, w.time_to_planarize) and np.all(w.time_to_planarize < w.time)
+    # the slowest site sets the default time: its die planarizes last, at time / (1 + over_polish)
+    assert w.time_to_planarize.max() * (1 + DieProcess().over_polish) == pytest.approx(w.time, rel=1e-12)
