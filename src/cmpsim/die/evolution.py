@@ -163,6 +163,8 @@ class DieEvolution:
                 self.t_planar[tuple(i[pending] for i in sub)] = when[pending]
             self.za[idx], self.zb[idx] = a1, b1
             left[idx] = dt - t_seg
+        if np.any(left > 0):  # cannot happen: a field changes material at most twice
+            raise RuntimeError("die evolution left time unpolished after four material changes")
         self.t = float(time)
 
     def _planarity_events(self, idx, state, a1, b1, t_seg, elapsed):
