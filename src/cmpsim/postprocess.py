@@ -13,11 +13,13 @@ import numpy as np
 from . import outputs, uniformity
 from .config import Config
 from .equilibrium import EquilibriumSolution, WaferProblem
+from .abrasion import abrasive_removal_rate
 from .flowfactors import shear_stress_factors
+from .kinetics import chemical_rate, flash_temperature, series_rate
 from .grainflow import GrainFlow, grain_coefficients
 from .removal import contact_shear_stress, newtonian_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
 from .reynolds import NEWTONIAN_GRAIN_COEFFICIENT
-from .setup import PhysicalSetup
+from .setup import PhysicalSetup, abrasive_contact
 
 __all__ = ["evaluate_outputs", "reduce_outputs"]
 
@@ -64,6 +66,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
             st.p_contact, np.hypot((1.0 - ar) * tsx, (1.0 - ar) * tsy), np.hypot(dux, duy),
             config.shear_power_coefficient, config.friction_coefficient, config.fluid_shear_weight,
         )
+    elif config.removal_law == "abrasive":
+        rr = _abrasive_removal(config, st.p_contact, ar, np.hypot(dux, duy))
     else:
         rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
     # film thickness: centre, and minimum over the cell centres and the rim
@@ -105,6 +109,19 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     }
     scalars, profiles = reduce_outputs(polar, g, problem.load_scale, config.edge_exclusion, explicit)
     return scalars, polar, profiles
+
+
+def _abrasive_removal(config: Config, p_contact, area_ratio, speed):
+    """Removal rate of the abrasive law (m/s), with the chemical step in series for ``removal_kinetics = 'two_step'``."""
+    if config.solids_loading == 0:
+        import warnings
+
+        warnings.warn("solids_loading = 0: no abrasive particles, so the abrasive removal law removes nothing (removal rate 0)", RuntimeWarning, stacklevel=3)
+    rr = abrasive_removal_rate(p_contact, area_ratio, speed, abrasive_contact(config)).rate
+    if config.removal_kinetics == "two_step":
+        t = flash_temperature(config.slurry_temperature, config.friction_coefficient, p_contact, speed, config.flash_heating_coefficient)
+        rr = series_rate(chemical_rate(t, config.chemical_rate, config.activation_energy, config.slurry_temperature), rr)
+    return rr
 
 
 def reduce_outputs(polar: dict, grid, load: float, edge_exclusion: float, explicit: dict):

@@ -7,8 +7,10 @@ and builds the :class:`~cmpsim.equilibrium.WaferProblem` that the equilibrium so
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+from .abrasion import AbrasiveContact
 from .compliance import LayeredFoundation, PadLayer, WinklerFoundation
 from .config import Config
 from .contact import PadSurface
@@ -18,9 +20,10 @@ from .geometry import check_geometry
 from .grainflow import granular_pressure
 from .grid import PolarGrid
 from .kinematics import Kinematics
+from .materials import ABRASIVES, FILMS
 from .reynolds import LubricationParameters
 
-__all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "pad_foundation", "HAFF_T"]
+__all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "pad_foundation", "abrasive_contact", "HAFF_T"]
 
 #: Haff's pressure constant t; the paper gives only t/a = 1, so t = a = 1 (docs/model.md).
 HAFF_T = 1.0
@@ -54,6 +57,31 @@ def pad_foundation(config: Config) -> WinklerFoundation | LayeredFoundation | No
     if config.pad_compliance == "layer":
         return LayeredFoundation(tuple(layers))
     return WinklerFoundation.from_layers(layers)
+
+
+def abrasive_contact(config: Config) -> AbrasiveContact:
+    """The particles, pad and film of the abrasive removal law (:mod:`cmpsim.abrasion`) of a Config.
+
+    The pad presses an embedded particle with p_pad = min(H_pad, 4 E'_pad / (3 pi)), E'_pad the
+    pad-particle effective modulus; the particle-film contact takes E* from both bodies and the
+    hardness and K of the softer one; the film takes its Hertz compliance share of the interference.
+    """
+    c = config
+    a, f = ABRASIVES[c.abrasive], FILMS[c.film]
+    pad_e = 1.0 / ((1.0 - c.pad_poisson**2) / c.pad_modulus + a.reduced_compliance)
+    soft = f if f.hardness <= a.hardness else a
+    compliance = a.reduced_compliance + f.reduced_compliance
+    return AbrasiveContact(
+        diameter=c.particle_diameter,
+        diameter_std=c.particle_size_std,
+        volume_fraction=c.solid_volume_fraction,
+        pad_pressure=min(c.pad_hardness, 4.0 * pad_e / (3.0 * math.pi)),
+        e_star=1.0 / compliance,
+        hardness=soft.hardness,
+        k_factor=0.454 + 0.41 * soft.poisson,
+        film_share=f.reduced_compliance / compliance,
+        efficiency=c.abrasion_efficiency,
+    )
 
 
 def physical_setup(config: Config) -> PhysicalSetup:
@@ -92,9 +120,9 @@ def physical_setup(config: Config) -> PhysicalSetup:
         kinematics=kin,
         flow_factor_floor=c.flow_factor_floor,
         slurry_model=c.slurry_model,
-        viscosity=c.slurry_viscosity,
+        viscosity=c.newtonian_viscosity,
     )
-    p0 = float(granular_pressure(c.granular_density, c.diameter_gap_ratio, v, t=HAFF_T))
+    p0 = float(granular_pressure(c.grain_bulk_density, c.diameter_gap_ratio, v, t=HAFF_T))
     n_r, n_t = c.grid_shape
     grid = PolarGrid(0.5 * c.wafer_diameter, n_r, n_t)
     return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_foundation(config))
