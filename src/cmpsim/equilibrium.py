@@ -200,7 +200,7 @@ class WaferProblem:
         _check_cavitation(lubrication.slurry_model, cavitation, cavitation_pressure)
         if not (np.isfinite(applied_pressure) and applied_pressure > 0):
             raise ValueError(f"applied_pressure must be > 0 Pa; got {applied_pressure!r}")
-        if not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
+        if lubrication.slurry_model == "granular" and not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
             raise ValueError(f"ambient granular pressure must be > 0 Pa; got {ambient_pressure!r}")
         if variant != "hydrodynamic" and pad is None:
             raise ValueError(f"model {variant!r} needs a PadSurface")
