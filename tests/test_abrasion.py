@@ -88,12 +88,12 @@ def test_the_interference_inverts_the_sphere_law_in_every_regime():
 
 
 def test_the_groove_section_is_the_circular_segment_to_mpmath_precision():
-    mpmath.mp.dps = 40
     r = 50e-9
-    for depth in [1e-15, 1e-12, 3e-10, 2.4e-9, 1e-8, 5e-8, 9e-8]:
-        rr, dd = mpmath.mpf(r), mpmath.mpf(depth)
-        exact = rr**2 * mpmath.acos(1 - dd / rr) - (rr - dd) * mpmath.sqrt(2 * rr * dd - dd**2)
-        assert float(groove_area(r, depth)) == pytest.approx(float(exact), rel=1e-13)
+    with mpmath.workdps(40):
+        for depth in [1e-15, 1e-12, 3e-10, 2.4e-9, 1e-8, 5e-8, 9e-8]:
+            rr, dd = mpmath.mpf(r), mpmath.mpf(depth)
+            exact = rr**2 * mpmath.acos(1 - dd / rr) - (rr - dd) * mpmath.sqrt(2 * rr * dd - dd**2)
+            assert float(groove_area(r, depth)) == pytest.approx(float(exact), rel=1e-13)
 
 
 def test_the_rate_is_continuous_across_the_elastic_plastic_indentation_boundaries():
