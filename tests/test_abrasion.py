@@ -22,7 +22,7 @@ from cmpsim.abrasion import (
 )
 from cmpsim.contact import PadSurface, asperity_laws
 from cmpsim.kinetics import chemical_rate, flash_temperature, series_rate
-from cmpsim.setup import abrasive_contact
+from cmpsim.models.removal_laws import abrasive_contact
 
 # silica (E 72 GPa, nu 0.17, H 9 GPa) on oxide (the same constants): the default pair
 E_SIO2, NU_SIO2, H_SIO2 = 72e9, 0.17, 9e9

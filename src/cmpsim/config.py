@@ -29,6 +29,7 @@ __all__ = [
     "Numerics",
     "Config",
     "parse_value",
+    "parameter",
     "parameter_table_markdown",
     "GRID_PRESETS",
     "PRESETS",
@@ -84,8 +85,8 @@ class Param:
         """Human-readable valid range, in the display unit (``cmpsim params``)."""
         if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
             return self.range_text()
-        lo = "-inf" if self.low is None else f"{to_display(self.name, self.low):.6g}"
-        hi = "inf" if self.high is None else f"{to_display(self.name, self.high):.6g}"
+        lo = "-inf" if self.low is None else f"{units.to_display(self, self.low):.6g}"
+        hi = "inf" if self.high is None else f"{units.to_display(self, self.high):.6g}"
         lb = "(" if (self.low is None or self.low_open) else "["
         hb = ")" if (self.high is None or self.high_open) else "]"
         return f"{lb}{lo}, {hi}{hb} {self.display}"
@@ -111,6 +112,7 @@ PARAMETERS: dict[str, Param] = {
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
+        _P("carrier", "process", "-", "choice", "", "rigid", "Wafer carrier: a rigid wafer held at a pivot at the centre of its face, under a uniform applied pressure (the paper)", "Paper eq. 30-31; docs/model.md ('Force and moment balance')", choices=("rigid",)),
         _P("removal_law", "process", "-", "choice", "", "abrasive", "Removal law: the paper's RR = K sigma_n tau; the shear-power law RR = k_s (mu p_c + chi tau_f) |du|; or abrasive particles trapped in the real contact ploughing the film", "docs/model.md ('Removal rate', 'Abrasive removal'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023); Luo & Dornfeld, IEEE Trans. Semicond. Manuf. 14, 112 (2001)", choices=("paper", "shear_power", "abrasive")),
         _P("abrasion_efficiency", "process", "k_a", "", "", 0.1, "Share of the groove ploughed by a trapped particle that leaves as debris (abrasive removal law)", "Three-body abrasion (particles free between two surfaces) wears about ten times less than two-body abrasion, which cuts the whole groove (Rabinowicz, Dunn & Russell, Wear 4, 345 (1961)); scale of the law, see docs/model.md ('Abrasive removal')", 0.0, 1.0, False, False),
         _P("removal_kinetics", "process", "-", "choice", "", "mechanical", "Removal kinetics: the mechanical removal alone, or a thermally activated chemical step in series with it (two-step, flash heating)", "docs/model.md ('Two-step kinetics'); Sorooshian, Philipossian, Borucki et al. (2004-2006); Mariscal et al., ECS J. Solid State Sci. Technol. 9, 044008 (2020)", choices=("mechanical", "two_step")),
@@ -297,13 +299,20 @@ def _parse_grid(value: Any) -> str:
     return f"{nr}x{nt}"
 
 
+def parameter(name: str) -> Param:
+    """The registry entry of input ``name``; ``ValueError`` listing the known names if there is none."""
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+    return PARAMETERS[name]
+
+
 def parse_value(name: str, value: Any) -> Any:
     """Convert one input to its SI value, checking unit dimension and range (:func:`cmpsim.units.parse`).
 
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number
     (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
     """
-    return units.parse(name, value)
+    return units.parse(parameter(name), value)
 
 
 def _section_fields(section: str) -> list[str]:
@@ -475,12 +484,12 @@ class Config:
 
 def to_display(name: str, value: Any) -> Any:
     """SI value of a parameter converted to its display unit (strings unchanged; :func:`cmpsim.units.to_display`)."""
-    return units.to_display(name, value)
+    return units.to_display(parameter(name), value)
 
 
 def format_display(name: str, value: Any) -> str:
     """SI value of a parameter as display text (:func:`cmpsim.units.format_display`)."""
-    return units.format_display(name, value)
+    return units.format_display(parameter(name), value)
 
 
 def parameter_table_markdown() -> str:

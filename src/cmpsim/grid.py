@@ -14,7 +14,7 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["PolarGrid"]
+__all__ = ["PolarGrid", "FaceOperators", "face_operators"]
 
 
 @dataclass(frozen=True)
@@ -198,3 +198,60 @@ class PolarGrid:
     def index(self, i, j) -> np.ndarray:
         """Linear unknown index of cell (i, j), with j taken modulo n_theta."""
         return np.asarray(i) * self.n_theta + np.mod(j, self.n_theta)
+
+
+@dataclass(frozen=True)
+class FaceOperators:
+    """Cell -> face interpolation and face -> cell divergence of the polar grid (sparse)."""
+
+    interp_radial: sp.csr_matrix  # radial faces x cells
+    interp_angular: sp.csr_matrix  # angular faces x cells
+    div_radial: sp.csr_matrix  # cells x radial faces: +1 for the cell inside, -1 outside
+    div_angular: sp.csr_matrix  # cells x angular faces: +1 clockwise cell, -1 counter-clockwise
+    ring_parity: np.ndarray  # (n_r, n_theta) ring index % 2
+    sector_parity: np.ndarray  # (n_r, n_theta) sector index % 2
+
+
+_OPERATORS: dict = {}
+
+
+def face_operators(grid: PolarGrid) -> FaceOperators:
+    """The :class:`FaceOperators` of a grid (built once per grid and cached).
+
+    Radial face (i, j) is the outer face of cell (i, j); the film on it is the mean of the two
+    cells beside it, extrapolated over the last half ring at the rim. Angular face (i, j) is the
+    counter-clockwise face of cell (i, j), shared with (i, j + 1).
+    """
+    import scipy.sparse as sp
+
+    ops = _OPERATORS.get(grid)
+    if ops is not None:
+        return ops
+    n_r, n_t, n = grid.n_r, grid.n_theta, grid.size
+    i = np.repeat(np.arange(n_r), n_t)
+    j = np.tile(np.arange(n_t), n_r)
+    f = np.arange(n)
+    inner = i < n_r - 1
+    P = grid.index(i, j)
+    # radial face (i, j) is the outer face of cell (i, j)
+    out = grid.index(np.minimum(i + 1, n_r - 1), j)
+    prev = grid.index(np.maximum(i - 1, 0), j)
+    rows = np.concatenate([f, f])
+    cols = np.concatenate([P, np.where(inner, out, prev)])
+    vals = np.concatenate([np.where(inner, 0.5, 1.5), np.where(inner, 0.5, -0.5)])
+    interp_r = sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+    div_r = sp.csr_matrix(
+        (np.concatenate([np.ones(n), -np.ones(inner.sum())]), (np.concatenate([P, out[inner]]), np.concatenate([f, f[inner]]))),
+        shape=(n, n),
+    )
+    # angular face (i, j) is the counter-clockwise face of cell (i, j), shared with (i, j + 1)
+    ccw = grid.index(i, j + 1)
+    interp_a = sp.csr_matrix((np.full(2 * n, 0.5), (np.concatenate([f, f]), np.concatenate([P, ccw]))), shape=(n, n))
+    div_a = sp.csr_matrix((np.concatenate([np.ones(n), -np.ones(n)]), (np.concatenate([P, ccw]), np.concatenate([f, f]))), shape=(n, n))
+    ops = FaceOperators(
+        interp_r, interp_a, div_r, div_a, (i % 2).reshape(n_r, n_t), (j % 2).reshape(n_r, n_t)
+    )
+    if len(_OPERATORS) > 16:
+        _OPERATORS.clear()
+    _OPERATORS[grid] = ops
+    return ops
