@@ -197,3 +197,34 @@ def test_two_step_kinetics_in_a_solve_is_slower_than_either_step_alone():
     both = cmpsim.solve(grid="coarse", relative=False, removal_kinetics="two_step")
     assert 0 < both.removal_rate_mean < mech.removal_rate_mean
     assert both.removal_rate_mean < both.config.chemical_rate * 1.1  # below the (slightly heated) chemical rate
+
+
+def test_the_new_inputs_sweep_with_units_and_choices(tmp_path):
+    """Every new input is an ordinary registry input: a sweep takes solids_loading in % and the abrasive by name."""
+    import tomllib
+
+    from cmpsim.sweeps import SweepSpec, sweep
+
+    spec = SweepSpec.from_mapping(tomllib.loads('[base]\ngrid = "coarse"\n[axes]\nsolids_loading = ["2 %", "4 %"]\nabrasive = ["silica", "alumina"]\n'))
+    ds = sweep(spec, workers=0, progress=False)
+    assert ds["solids_loading"].values.tolist() == [pytest.approx(0.02), pytest.approx(0.04)]
+    rr = ds["removal_rate_mean"]
+    ratio = (rr.sel(abrasive="silica").isel(solids_loading=1) / rr.sel(abrasive="silica").isel(solids_loading=0)).item()
+    assert ratio == pytest.approx(2.0, rel=0.03)  # proportional to the loading (docs/model.md, 13e.6)
+    assert rr.sel(abrasive="alumina").isel(solids_loading=0).item() != rr.sel(abrasive="silica").isel(solids_loading=0).item()
+
+
+def test_the_two_step_constants_can_be_calibrated(tmp_path):
+    """`cmpsim calibrate --free chemical_rate` fits the chemical step to data it limits."""
+    from cmpsim import calibrate
+
+    truth = cmpsim.Config.default().replace(grid="coarse", removal_kinetics="two_step", chemical_rate="60 nm/min")
+    rows = []
+    for psi in (2, 4, 6):
+        r = cmpsim.solve(truth, applied_pressure=f"{psi} psi", relative=False)
+        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{psi} psi")
+    path = tmp_path / "two_step.csv"
+    path.write_text("# dataset: synthetic\n# citation: made by the model\n# provenance: test\n# conditions: default\n"
+                    "dataset,quantity,value,unit,uncertainty,comparison,applied_pressure\n" + "\n".join(rows) + "\n")
+    fit = calibrate(path, free=["chemical_rate"], config=truth.replace(chemical_rate="150 nm/min"), progress=False)
+    assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
