@@ -60,47 +60,19 @@ class Material:
         return (1.0 - self.poisson**2) / self.modulus
 
 
-#: The abrasives of ``abrasive``.
-ABRASIVES: dict[str, Material] = {
-    "silica": Material(
-        "silica", 2200.0, 72e9, 0.17, 9.0e9,
-        "Amorphous (fused) silica: rho 2200 kg/m^3 (the value cmpsim's wt% conversions used before); "
-        "E = 72 GPa, nu = 0.17, H about 9 GPa (the nanoindentation reference material of Oliver & Pharr, "
-        "J. Mater. Res. 7, 1564 (1992)). Colloidal (Stoeber) silica is more porous and softer: an upper bound",
-    ),
-    "ceria": Material(
-        "ceria", 7215.0, 210e9, 0.30, 6.0e9,
-        "CeO2: rho 7215 kg/m^3 (CRC Handbook of Chemistry and Physics); E = 210 GPa (+-5 %) for dense ceramics "
-        "(Korobko et al., Scripta Mater. 66, 155 (2012)); nu = 0.30 (assumed, typical oxide ceramic); "
-        "H = 6 GPa: order of magnitude only (Mohs 6; no primary nanoindentation value was found): the least "
-        "certain number of this table",
-    ),
-    "alumina": Material(
-        "alumina", 3980.0, 416e9, 0.231, 15e9,
-        "alpha-Al2O3: rho 3980 kg/m^3, E = 416 GPa, nu = 0.231, Vickers hardness about 15 GPa "
-        "(Munro, J. Am. Ceram. Soc. 80, 1919 (1997), evaluated properties of sintered alpha-alumina)",
-    ),
-}
+#: The abrasives of ``abrasive``: (name, density kg/m^3, modulus Pa, Poisson ratio, hardness Pa, source).
+ABRASIVES: dict[str, Material] = {r[0]: Material(*r) for r in (
+    ('silica', 2200.0, 72000000000.0, 0.17, 9000000000.0, "Amorphous (fused) silica: rho 2200 kg/m^3 (the value cmpsim's wt% conversions used before); E = 72 GPa, nu = 0.17, H about 9 GPa (the nanoindentation reference material of Oliver & Pharr, J. Mater. Res. 7, 1564 (1992)). Colloidal (Stoeber) silica is more porous and softer: an upper bound"),
+    ('ceria', 7215.0, 210000000000.0, 0.3, 6000000000.0, 'CeO2: rho 7215 kg/m^3 (CRC Handbook of Chemistry and Physics); E = 210 GPa (+-5 %) for dense ceramics (Korobko et al., Scripta Mater. 66, 155 (2012)); nu = 0.30 (assumed, typical oxide ceramic); H = 6 GPa: order of magnitude only (Mohs 6; no primary nanoindentation value was found): the least certain number of this table'),
+    ('alumina', 3980.0, 416000000000.0, 0.231, 15000000000.0, 'alpha-Al2O3: rho 3980 kg/m^3, E = 416 GPa, nu = 0.231, Vickers hardness about 15 GPa (Munro, J. Am. Ceram. Soc. 80, 1919 (1997), evaluated properties of sintered alpha-alumina)'),
+)}
 
-#: The films of ``film`` (density unused: 0).
-FILMS: dict[str, Material] = {
-    "oxide": Material(
-        "oxide", 0.0, 72e9, 0.17, 9.0e9,
-        "Silicon dioxide (thermal oxide as fused silica: Oliver & Pharr, J. Mater. Res. 7, 1564 (1992), "
-        "E = 72 GPa, nu = 0.17, H about 9 GPa); PECVD TEOS films are somewhat softer (6-8 GPa)",
-    ),
-    "copper": Material(
-        "copper", 0.0, 128e9, 0.34, 1.5e9,
-        "Polycrystalline copper: E = 128 GPa, nu = 0.34 (CRC Handbook); H = 1.5 GPa, the middle of the "
-        "1-2 GPa that nanoindentation gives for sputtered and electroplated films (film hardness exceeds the "
-        "bulk 0.4-0.9 GPa; Nix, Metall. Trans. A 20, 2217 (1989))",
-    ),
-    "tungsten": Material(
-        "tungsten", 0.0, 411e9, 0.28, 6.0e9,
-        "Tungsten: E = 411 GPa, nu = 0.28 (CRC Handbook); H = 6 GPa for CVD films (bulk Vickers 3.4-4.5 GPa; "
-        "thin films harder): order of magnitude, second-hand",
-    ),
-}
+#: The films of ``film`` (no density: 0).
+FILMS: dict[str, Material] = {r[0]: Material(*r) for r in (
+    ('oxide', 0.0, 72000000000.0, 0.17, 9000000000.0, 'Silicon dioxide (thermal oxide as fused silica: Oliver & Pharr, J. Mater. Res. 7, 1564 (1992), E = 72 GPa, nu = 0.17, H about 9 GPa); PECVD TEOS films are somewhat softer (6-8 GPa)'),
+    ('copper', 0.0, 128000000000.0, 0.34, 1500000000.0, 'Polycrystalline copper: E = 128 GPa, nu = 0.34 (CRC Handbook); H = 1.5 GPa, the middle of the 1-2 GPa that nanoindentation gives for sputtered and electroplated films (film hardness exceeds the bulk 0.4-0.9 GPa; Nix, Metall. Trans. A 20, 2217 (1989))'),
+    ('tungsten', 0.0, 411000000000.0, 0.28, 6000000000.0, 'Tungsten: E = 411 GPa, nu = 0.28 (CRC Handbook); H = 6 GPa for CVD films (bulk Vickers 3.4-4.5 GPa; thin films harder): order of magnitude, second-hand'),
+)}
 
 
 def volume_fraction(mass_fraction, particle_density, liquid_density=LIQUID_DENSITY):
