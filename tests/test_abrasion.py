@@ -228,3 +228,17 @@ def test_the_two_step_constants_can_be_calibrated(tmp_path):
                     "dataset,quantity,value,unit,uncertainty,comparison,applied_pressure\n" + "\n".join(rows) + "\n")
     fit = calibrate(path, free=["chemical_rate"], config=truth.replace(chemical_rate="150 nm/min"), progress=False)
     assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
+
+
+def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_computes():
+    """docs/model.md 13e.6, CHANGELOG: base case 117.53 nm/min with the abrasive law (88.41 with the
+    shear-power law, the default before issue 24); 187.31 nm/min at Lai's conditions for copper and alumina."""
+    base = cmpsim.solve(relative=False)
+    old = cmpsim.solve(relative=False, removal_law="shear_power")
+    lai = cmpsim.solve(relative=False, film="copper", abrasive="alumina", applied_pressure="48 kPa", rotation_speed="75 rpm",
+                       centre_distance="89.13 mm", wafer_diameter="100 mm", particle_diameter="300 nm")
+    assert round(base.removal_rate_mean * 6e10, 2) == 117.53
+    assert round(old.removal_rate_mean * 6e10, 2) == 88.41
+    assert round(lai.removal_rate_mean * 6e10, 2) == 187.31
+    # the film, pressure and contact of the default did not move (only the removal law changed)
+    assert base.film_thickness_center == old.film_thickness_center and base.contact_load_fraction == old.contact_load_fraction
