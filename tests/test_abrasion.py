@@ -148,6 +148,9 @@ def test_at_fixed_mass_loading_the_rate_does_not_depend_on_the_particle_size():
     rates = [abrasive_removal_rate(np.array([27e3]), np.array([6e-4]), np.array([0.63]), silica_on_oxide(diameter=d)).rate[0]
              for d in (20e-9, 100e-9, 1e-6, 2e-6)]
     np.testing.assert_allclose(rates, rates[0], rtol=1e-9)
+    # and while the pad touches the wafer, a spread of sizes changes nothing either (sum n A_g ~ <x^3>/<x^3>)
+    spread = abrasive_removal_rate(np.array([27e3]), np.array([6e-4]), np.array([0.63]), silica_on_oxide(diameter_std=40e-9)).rate[0]
+    assert spread == pytest.approx(rates[0], rel=1e-9)
 
 
 def test_while_the_pad_touches_the_wafer_the_rate_is_proportional_to_the_loading():
