@@ -180,7 +180,13 @@ def test_derived_planarization_length_of_ic1000_suba_iv_exceeds_the_published_on
 # ---------------------------------------------------------------------------- the wafer
 @pytest.fixture(scope="module")
 def wafer_result():
-    return cmpsim.solve(cmpsim.Config.default().replace(wafer_diameter="200 mm", grid="coarse"), relative=False)
+    """A 200 mm wafer polishing copper (the film of the copper process)."""
+    return cmpsim.solve(cmpsim.Config.default().replace(wafer_diameter="200 mm", grid="coarse", film="copper"), relative=False)
+
+
+@pytest.fixture(scope="module")
+def oxide_wafer_result():
+    return cmpsim.solve(cmpsim.Config.default().replace(wafer_diameter="200 mm", grid="coarse", film="oxide"), relative=False)
 
 
 def test_each_die_of_the_wafer_is_the_die_polished_at_its_own_blanket_rate(wafer_result):
@@ -309,10 +315,17 @@ def test_a_user_planarization_length_replaces_the_derived_one_and_both_are_repor
     assert data["time"] == pytest.approx(60.0) and data["blanket_rate"] == pytest.approx(100e-9 / 60)
 
 
-def test_an_oxide_wafer_reports_planarization_and_no_dishing(wafer_result):
-    w = die.simulate_wafer(die.builtin_layout("density", 1e-3), result=wafer_result)
+def test_an_oxide_wafer_reports_planarization_and_no_dishing(oxide_wafer_result):
+    w = die.simulate_wafer(die.builtin_layout("density", 1e-3), result=oxide_wafer_result)
     d = w.to_dict()
     assert all(x["dishing_max"] is None and x["erosion_max"] is None for x in d["dies"])
     assert np.allclose(w.time_to_clear, w.time_to_planarize) and np.all(w.time_to_planarize < w.time)
     # the slowest site sets the default time: its die planarizes last, at time / (1 + over_polish)
     assert w.time_to_planarize.max() * (1 + DieProcess().over_polish) == pytest.approx(w.time, rel=1e-12)
+
+
+def test_the_wafer_solve_polishes_the_film_of_the_process(wafer_result):
+    lay = die.builtin_layout("uniform", 500e-6)
+    assert die.simulate(lay, 10.0, blanket_rate=K, process="copper").to_dict()["film"] == "copper"
+    with pytest.raises(ValueError, match="film = 'oxide'"):
+        die.simulate_wafer(lay, 10.0, result=wafer_result, process="oxide")

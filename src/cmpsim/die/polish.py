@@ -21,6 +21,7 @@ from .evolution import DieEvolution
 from .layout import BUILTIN_LAYOUTS, Layout, builtin_layout, read_layout
 from .pad import pad_stack, planarization_length_from_pad
 from .process import DieProcess
+from .stacks import film_stack
 
 __all__ = ["simulate", "simulate_wafer", "DieResult", "WaferDies", "load_layout", "die_sites", "blanket_rates"]
 
@@ -119,6 +120,7 @@ class DieResult:
             "planarization_length": self.planarization_length,
             "planarization_length_from_pad": self.planarization_length_from_pad,
             "weighting": self.weighting,
+            "film": self.evolution.stack.film,
             "time_to_planarize": _finite(self.time_to_planarize),
             "time_to_clear": _finite(self.time_to_clear) if ev.stack.metal else None,
             "step_height_max": _finite(float(np.nanmax(ev.step_height))) if np.isfinite(ev.step_height).any() else None,
@@ -255,6 +257,9 @@ def _prepare(layout, config, process, planarization_length, weighting, cell_size
         process = DieProcess.from_values(process or "oxide", **process_values)
     elif process_values:
         raise ValueError("give the die inputs either as a DieProcess or as keywords, not both")
+    film = film_stack(process).film  # the wafer solve polishes the film of the process
+    if getattr(config, "film", film) != film:
+        config = config.replace(film=film)
     w, derived = _weighting(config, planarization_length, weighting)
     eff = effective_density(layout.density, layout.cell_size, w)
     return config, layout, process, w, derived, eff
@@ -404,6 +409,11 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     """
     if result is not None and config is not None and config.to_dict() != result.config.to_dict():
         raise ValueError("give config or the result of its solve, not a result of other inputs: the dies take the pad and the wafer from result.config")
+    if result is not None:
+        kind = process.kind if isinstance(process, DieProcess) else (process or "oxide")
+        want = film_stack(DieProcess(kind=kind)).film
+        if getattr(result.config, "film", want) != want:
+            raise ValueError(f"the {kind} process needs the blanket rate of film = {want!r}; the result was solved for film = {result.config.film!r}")
     config, layout, process, w, derived, eff = _prepare(layout, config if result is None else result.config, process,
                                                         planarization_length, weighting, cell_size, **process_values)
     if result is None:

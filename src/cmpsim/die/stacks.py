@@ -21,6 +21,8 @@ class FilmStack(Protocol):
 
     #: True where metal lines are polished: the stack reports dishing, erosion and a clearing time.
     metal: bool
+    #: The film whose blanket rate drives the stack (the wafer solve's ``film`` input).
+    film: str
 
     def levels(self, density, width):
         """(local fraction of level A, whether the effective density is that of A (True) or of B, gap width of the lower level (m), zA, zB)."""
@@ -42,6 +44,7 @@ class OxideStack:
     """Oxide ILD/STI: A = oxide over the lines (fraction rho), B = oxide over the spaces, ``step_height`` lower; one material."""
 
     metal = False
+    film = "oxide"
 
     def __init__(self, process):
         self.p = process
@@ -73,6 +76,7 @@ class CopperStack:
     """
 
     metal = True
+    film = "copper"
 
     def __init__(self, process):
         self.p = process
