@@ -329,3 +329,15 @@ def test_the_wafer_solve_polishes_the_film_of_the_process(wafer_result):
     assert die.simulate(lay, 10.0, blanket_rate=K, process="copper").to_dict()["film"] == "copper"
     with pytest.raises(ValueError, match="film = 'oxide'"):
         die.simulate_wafer(lay, 10.0, result=wafer_result, process="oxide")
+
+
+def test_a_cell_snapped_onto_the_contact_height_keeps_polishing():
+    """Regression: after the snap onto |s| = h, zA - (zA - h) may exceed h by an ulp; the cell
+    then bounced between the two regimes and `cmpsim die lines` failed ("left time unpolished")."""
+    from cmpsim.die.stepheight import advance
+
+    k = 1.958870281687486e-09
+    za, zb = advance(0.0, -1e-06, 0.2692705992352215, 9.795319242856495e-08, k, k, 127.6245815443355)
+    removed = 0.2692705992352215 * (0.0 - za) + (1 - 0.2692705992352215) * (-1e-06 - zb)
+    assert abs(removed - k * 127.6245815443355) < 1e-12 * 1e-6  # mass balance: the cell removes K t on average
+    assert 0.0 <= za - zb < 9.795319242856495e-08
