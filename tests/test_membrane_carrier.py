@@ -77,7 +77,7 @@ def test_a_membrane_on_a_rigid_pad_is_refused_with_the_reason():
 
 
 def test_the_numbers_of_the_model_document_at_the_default_operating_point():
-    """docs/model.md, section 13e: bending, pressure, non-uniformity and fluid share, rigid against membrane."""
+    """docs/model.md, section 13f: bending, pressure, non-uniformity and fluid share, rigid against membrane."""
     r0 = cmpsim.solve(Config.default(), relative=False)
     r1 = cmpsim.solve(Config.default().replace(carrier="membrane"), relative=False)
     P = r0.config.applied_pressure
@@ -94,7 +94,7 @@ def test_the_numbers_of_the_model_document_at_the_default_operating_point():
 
 
 def test_a_zone_raised_by_ten_percent_hardly_moves_the_removal_rate_under_it():
-    """docs/model.md, section 13e: at the default operating point the 8 um slurry film carries a zone's
+    """docs/model.md, section 13f: at the default operating point the 8 um slurry film carries a zone's
     extra load (kPa per 10 nm of film shape), so zone pressure does not steer removal. Kept as a test
     so that a change of the slurry physics that gives zones their grip shows here (and in the docs)."""
     base = Config.default().replace(carrier="membrane", zone_radii="10,20,30,38.1 mm")

@@ -36,7 +36,7 @@ def test_far_from_the_ring_the_pad_does_not_move_and_a_wide_disk_sinks_it_like_a
     # a load on 0 < r < 1 m: the centre sinks by p / k, the long-wavelength limit C(0) = 1/k (minus the local part)
     centre = stack.annulus_deflection(np.array([0.0]), 1e-9, 1.0, 5 * PSI)[0]
     assert centre == pytest.approx(5 * PSI * (1.0 / stack.stiffness - stack.local_compliance), rel=1e-3)
-    # docs/model.md, section 13e: 2.7 um at the wafer edge per 2 psi of ring pressure (1 mm gap, 20 mm width)
+    # docs/model.md, section 13f: 2.7 um at the wafer edge per 2 psi of ring pressure (1 mm gap, 20 mm width)
     assert stack.annulus_deflection(np.array([0.0381]), 0.0391, 0.0591, 2 * PSI)[0] == pytest.approx(2.70e-6, abs=0.01e-6)
     with pytest.raises(ValueError, match="annulus_deflection is for points inside the annulus"):
         stack.annulus_deflection(np.array([0.05]), 0.0391, 0.0591, 1.0)
@@ -54,5 +54,5 @@ def test_raising_the_ring_pressure_lowers_the_edge_rate_monotonically():
         assert np.max(np.abs(r.solution.state.residual)) < 1e-9
     assert all(b < a for a, b in zip(edge, edge[1:])), edge
     assert edge[0] > 1.3 and edge[-1] < 0.9  # the fast edge band of the layered pad, then a slow one
-    # docs/model.md, section 13e: the non-uniformity has a minimum near 4 psi
+    # docs/model.md, section 13f: the non-uniformity has a minimum near 4 psi
     assert wiwnu == pytest.approx([0.084, 0.040, 0.034, 0.044], abs=0.001)
