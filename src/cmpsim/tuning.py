@@ -23,9 +23,10 @@ import numpy as np
 from scipy.optimize import lsq_linear
 
 from . import models
-from .config import Config, zone_mean_pressure
+from .config import Config
 from .model import build_problem, solve
 from .uniformity import ring_areas_inside, ring_edges, weighted_std_over_mean
+from .units import to_si
 
 __all__ = ["ZoneTuning", "tune_zones", "DEFAULT_BOUNDS", "KEEP"]
 
@@ -81,15 +82,18 @@ class _Solver:
         self.config, self.solves = config, 0
         self.start, self.bending = None, None
 
-    def __call__(self, pressures, keep_start: bool = True):
+    def __call__(self, pressures):
+        """The solve at these zone pressures (Pa), warm-started from the adopted one."""
         cfg = self.config.replace(zone_pressures=tuple(float(p) for p in pressures))
         problem = build_problem(cfg)
         problem.carrier.initial_bending = self.bending
         r = solve(cfg, start=self.start, relative=False, problem=problem)
         self.solves += 1
-        if keep_start:
-            self.start, self.bending = r.solution.state.u, problem.carrier.bending[1]
         return r
+
+    def adopt(self, result) -> None:
+        """Start the next solves from ``result``'s equilibrium and bending."""
+        self.start, self.bending = result.solution.state.u, result.problem.carrier.bending[1]
 
 
 def _weights(result) -> np.ndarray:
@@ -135,7 +139,7 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
         raise ValueError(f"tune_zones needs carrier = 'membrane' (zone pressures to tune); got carrier = {config.carrier!r}")
     if keep not in KEEP:
         raise ValueError(f"keep must be one of {KEEP}; got {keep!r}")
-    lo, hi = (config.replace(applied_pressure=b).applied_pressure if isinstance(b, str) else float(b) for b in bounds)
+    lo, hi = (to_si(b, "Pa", "bounds", example="psi") for b in bounds)
     if not (0 < lo < hi):
         raise ValueError(f"bounds must be 0 < low < high (Pa); got ({lo:g}, {hi:g}) Pa")
     radii = config.zone_outer_radii
@@ -144,6 +148,7 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
         raise ValueError(f"the start's zone pressures {', '.join(f'{p:g}' for p in start)} Pa lie outside the bounds [{lo:g}, {hi:g}] Pa")
     run = _Solver(config)
     base = run(start)
+    run.adopt(base)
     weights = _weights(base)
     areas = np.diff(np.concatenate([[0.0], radii]) ** 2)  # zone areas / pi
     target_rate = float(np.sum(weights * _profile(base)["rate"]) / weights.sum())
@@ -162,7 +167,7 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
             trial = pressures.copy()
             trial[k] += dp if trial[k] + dp <= hi else -dp
             step_k = trial[k] - pressures[k]
-            response[:, k] = (_profile(run(trial, keep_start=False))["rate"] - rate) / step_k
+            response[:, k] = (_profile(run(trial))["rate"] - rate) / step_k
         # least squares in (dP, m): sqrt(a_i) (rate_i + J dP - m) -> 0, relative to the mean rate
         w = np.sqrt(weights / weights.sum()) / target_rate
         A = np.hstack([w[:, None] * response, -w[:, None]])
@@ -190,6 +195,7 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
             break
         gain = (wiwnu - value) / wiwnu
         current, pressures, wiwnu = result, trial, value
+        run.adopt(result)
         history.append((tuple(pressures), wiwnu))
         if gain < rtol:
             break
@@ -206,7 +212,3 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
         history=history,
     )
 
-
-def mean_pressure(tuning: ZoneTuning) -> float:
-    """Area-weighted mean of the tuned zone pressures (the load over the wafer area), Pa."""
-    return zone_mean_pressure(tuning.zone_radii, tuning.zone_pressures)
