@@ -106,3 +106,10 @@ def test_a_zone_raised_by_ten_percent_hardly_moves_the_removal_rate_under_it():
     assert np.max(np.abs(change)) < 0.01
     fluid = r1.solution.state.p_fluid.mean(axis=1) - r0.solution.state.p_fluid.mean(axis=1)
     assert np.max(fluid[(r0.problem.grid.r[:, 0] > 0.01) & (r0.problem.grid.r[:, 0] < 0.02)]) > 0.5 * 0.4 * 6894.757  # the slurry takes it
+
+
+def test_the_result_carries_the_wafer_bending_as_a_field_and_a_profile(zoned, rigid):
+    w = zoned.problem.carrier.bending[1]
+    assert np.max(np.abs(zoned.polar["wafer_bending"] - w)) < 1e-6 * np.max(np.abs(w))
+    assert zoned.profiles["wafer_bending_profile"] == pytest.approx(w.mean(axis=1), rel=1e-6, abs=1e-6 * np.max(np.abs(w)))
+    assert not np.any(rigid.polar["wafer_bending"]) and zoned.to_dict()["units"]["wafer_bending"] == "m"

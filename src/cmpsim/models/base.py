@@ -157,6 +157,9 @@ class CarrierModel(Protocol):
     def residual_change(self, problem, dp) -> np.ndarray:
         """The change of the residuals under a pressure change dp."""
 
+    def bending_field(self, problem) -> np.ndarray:
+        """The wafer's bending at the cell centres (m), zero for a rigid wafer."""
+
     def equilibrium(self, problem, solve, start=None, **options):
         """The :class:`~cmpsim.state.EquilibriumSolution` of ``problem``, with ``solve`` (Newton on the
         rigid-body unknowns, :func:`cmpsim.equilibrium.solve_equilibrium`) doing the rigid-body part."""

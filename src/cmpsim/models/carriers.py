@@ -77,6 +77,10 @@ class RigidCarrier:
         rigid-body unknowns (:func:`cmpsim.equilibrium.solve_equilibrium`)."""
         return solve(problem, start=start, **options)
 
+    def bending_field(self, problem) -> np.ndarray:
+        """The wafer's bending at the cell centres of ``problem``'s grid, m: none for a rigid wafer."""
+        return np.zeros((problem.grid.n_r, problem.grid.n_theta))
+
     def load(self, applied_pressure: float, radius: float) -> float:
         """Total applied load P_applied pi R_w^2, N."""
         return applied_pressure * np.pi * radius * radius
@@ -164,6 +168,12 @@ class MembraneCarrier(RigidCarrier):
         if self.bending is None:
             return h
         return h + self._bend(x, y)
+
+    def bending_field(self, problem) -> np.ndarray:
+        """The wafer's bending w (m, away from the pad) at the cell centres of ``problem``'s grid (0 before a solve)."""
+        if self.bending is None:
+            return super().bending_field(problem)
+        return self._bend(problem.xc, problem.yc)
 
     def back_pressure(self, grid) -> np.ndarray:
         """The zone pressures behind the wafer as a cell field on ``grid``, Pa (:func:`cmpsim.plate.zone_load`)."""
