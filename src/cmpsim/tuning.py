@@ -58,6 +58,21 @@ class ZoneTuning:
     solves: int
     history: list = field(default_factory=list)
 
+    @property
+    def response_inside(self) -> tuple:
+        """Share of each zone's removal response that falls inside the zone itself (fraction per zone).
+
+        The ring-area-weighted |d RR_i / d P_k| summed over the rings whose centre lies in zone k,
+        over its sum over the wafer: 1 when a zone moves the rate only under itself, the zone's
+        area share when its pressure moves the wafer as a whole.
+        """
+        r = np.asarray(self.profile["radius"])
+        edges = np.concatenate([[0.0], self.zone_radii])
+        ring_area = np.diff(np.linspace(0.0, edges[-1], r.size + 1) ** 2)
+        weight = np.abs(self.response) * ring_area[:, None]
+        inside = [(r >= a) & (r < b) for a, b in zip(edges[:-1], edges[1:])]
+        return tuple(float(weight[m, k].sum() / weight[:, k].sum()) if weight[:, k].sum() > 0 else float("nan") for k, m in enumerate(inside))
+
     def to_dict(self) -> dict:
         """The JSON object of ``cmpsim tune-zones --json`` (SI units)."""
         return {
@@ -70,7 +85,8 @@ class ZoneTuning:
                 "within_wafer_nonuniformity": self.before["within_wafer_nonuniformity"],
                 "profile": {k: list(map(float, v)) for k, v in self.before["profile"].items()},
             },
-            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s"},
+            "zone_response_inside": list(self.response_inside),
+            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1"},
             "solves": self.solves,
         }
 
