@@ -85,12 +85,14 @@ class KirchhoffPlate:
     poisson: float
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.thickness) and self.thickness > 0):
-            raise ValueError(f"wafer_thickness must be finite and > 0 m; got {self.thickness!r}")
-        if not (np.isfinite(self.modulus) and self.modulus > 0):
-            raise ValueError(f"wafer_modulus must be finite and > 0 Pa; got {self.modulus!r}")
-        if not (0.0 <= self.poisson < 0.5):
-            raise ValueError(f"wafer_poisson must be in [0, 0.5); got {self.poisson!r}")
+        t, e, nu = self.thickness, self.modulus, self.poisson
+        for name, value, valid, ok in (
+            ("wafer_thickness", t, "finite and > 0 m", np.isfinite(t) and t > 0),
+            ("wafer_modulus", e, "finite and > 0 Pa", np.isfinite(e) and e > 0),
+            ("wafer_poisson", nu, "in [0, 0.5)", 0.0 <= nu < 0.5),
+        ):
+            if not ok:
+                raise ValueError(f"{name} must be {valid}; got {value!r}")
 
     @property
     def bending_stiffness(self) -> float:
