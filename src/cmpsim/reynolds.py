@@ -25,7 +25,7 @@ Discretisation: conservative cell-centred finite volumes on :class:`cmpsim.grid.
 two-point normal gradients, cross-gradient (off-diagonal tensor) terms from averaged central
 differences, the Dirichlet edge at half a cell from the last centres. The observed order is
 2 (``tests/test_reynolds.py``, manufactured solutions). Solved with a sparse LU
-(``scipy.sparse.linalg.splu``); any callable ``solver(A) -> object with .solve(b)`` can be
+(:func:`cmpsim.sparse.factorize`); any callable ``solver(A) -> object with .solve(b)`` can be
 injected.
 """
 
@@ -35,12 +35,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .flowfactors import RoughnessGeometry, pressure_flow_factors, regularize_pressure_tensor, shear_flow_factors
 from .grainflow import grain_coefficients
 from .grid import PolarGrid
 from .kinematics import Kinematics
+from .sparse import factorize as guarded_factorize
 
 __all__ = [
     "SLURRY_MODELS",
@@ -316,12 +316,9 @@ def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
 
 
 def factorize(A: sp.spmatrix):
-    """Default sparse direct solver: SuperLU factorisation of A (CSC), with ``.solve(b)``.
-
-    The operator's sparsity pattern is symmetric, so a minimum-degree ordering of A^T + A
-    fills in least (3x faster than the default COLAMD on the default grid).
-    """
-    return spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A")
+    """Default sparse direct solver, :func:`cmpsim.sparse.factorize` (SuperLU keeping the
+    minimum-degree ordering, residual-guarded; ``docs/model.md``, "Sparse factorisation")."""
+    return guarded_factorize(A)
 
 
 class LinearSolveStats:

@@ -21,7 +21,7 @@ __all__ = ["FLOORS", "UTILITIES", "source_modules", "imports_of", "floor_of", "v
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("kernels", "pure vectorised physics, each function an equation of the paper; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "uniformity")),
-    ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems", ("grid", "reynolds", "cavitation")),
+    ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems", ("grid", "sparse", "reynolds", "cavitation")),
     ("solver", "force and moment balance of the wafer (Newton), coupled with the pad deflection", ("equilibrium", "compliance")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
