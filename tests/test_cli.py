@@ -32,6 +32,16 @@ def test_run_json_equals_python_api():
     assert json.loads(res.stdout) == json.loads(api.to_json())
 
 
+def test_run_relative_asks_for_the_relative_removal_rate():
+    """Issue 23: the default model gives removal_rate_relative (and solves its reference case) on request only."""
+    plain = json.loads(CliRunner().invoke(main, ["run", "--json", "--set", "grid=coarse"]).stdout)
+    asked = json.loads(CliRunner().invoke(main, ["run", "--json", "--relative", "--set", "grid=coarse"]).stdout)
+    assert "removal_rate_relative" not in plain["values"] and asked["values"]["removal_rate_relative"] > 0
+    assert asked["units"]["removal_rate_relative"] == "1"
+    paper = json.loads(CliRunner().invoke(main, ["run", "--json", "--no-relative", "--preset", "paper", "--set", "grid=coarse"]).stdout)
+    assert "removal_rate_relative" not in paper["values"]
+
+
 def test_run_table_gives_every_output_its_unit_in_the_unit_column():
     import re
 
