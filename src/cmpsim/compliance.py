@@ -346,7 +346,7 @@ def _face_operators(grid) -> _FaceOperators:
     prev = grid.index(np.maximum(i - 1, 0), j)
     rows = np.concatenate([f, f])
     cols = np.concatenate([P, np.where(inner, out, prev)])
-    vals = np.concatenate([np.where(inner, 0.5, 1.5), np.where(inner, 0.5, -0.5)])
+    vals = np.concatenate([grid.radial_face_weights[0][i, 0], grid.radial_face_weights[1][i, 0]])  # linear in r
     interp_r = sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
     div_r = sp.csr_matrix(
         (np.concatenate([np.ones(n), -np.ones(inner.sum())]), (np.concatenate([P, out[inner]]), np.concatenate([f, f[inner]]))),

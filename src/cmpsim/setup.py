@@ -95,8 +95,7 @@ def physical_setup(config: Config) -> PhysicalSetup:
         viscosity=c.slurry_viscosity,
     )
     p0 = float(granular_pressure(c.granular_density, c.diameter_gap_ratio, v, t=HAFF_T))
-    n_r, n_t = c.grid_shape
-    grid = PolarGrid(0.5 * c.wafer_diameter, n_r, n_t)
+    grid = c.polar_grid()
     return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_foundation(config))
 
 
