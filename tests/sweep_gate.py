@@ -15,6 +15,7 @@ import this file (the parent's ``sys.path`` reaches them) and run the same gate.
 from __future__ import annotations
 
 import os
+import signal
 import sys
 import threading
 from pathlib import Path
@@ -46,6 +47,14 @@ def gated_run_point(task, prev=None, prev2=None):
 
 def main(argv: list[str]) -> None:
     from cmpsim import cli, sweeps
+
+    # What a terminal gives its foreground job: SIGINT at its default, so Ctrl-C raises
+    # KeyboardInterrupt. A test suite started in the background (`cmd &` in a script, nohup,
+    # some CI runners) hands SIGINT down as ignored, and a Python process that starts with it
+    # ignored never raises KeyboardInterrupt: the Ctrl-C test then waited for a run that,
+    # like any Unix program started that way, correctly ignored the signal (the hang of the
+    # newcomer runs, whose quick start was started in the background).
+    signal.signal(signal.SIGINT, signal.default_int_handler)
 
     os.environ[TOKENS], os.environ[TOKEN_DIR] = argv[0], str(Path(argv[1]).resolve())
     Path(argv[1]).mkdir(parents=True, exist_ok=True)

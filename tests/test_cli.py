@@ -108,6 +108,57 @@ def test_console_script_runs_on_defaults():
     assert json.loads(proc.stdout)["solver"]["converged"] is True
 
 
+def test_version_is_the_one_written_in_version_py():
+    from cmpsim._version import __version__
+
+    res = CliRunner().invoke(main, ["--version"])
+    assert res.exit_code == 0 and res.output == f"cmpsim, version {__version__}\n"
+
+
+#: The one line the command line prints for the warning of a reference case that removes nothing
+#: (a rigid pad with the measured 5 um summits hydroplanes there).
+NAN_WARNING = (
+    "cmpsim: warning: removal_rate_relative is undefined (NaN, null in JSON): the reference case "
+    "(LEP, 4 psi, 60 rpm, d = 100 nm, sigma = reference_roughness) removes nothing\n"
+)
+
+
+def test_console_script_prints_cmpsims_warning_as_one_line_without_the_source_echo():
+    proc = subprocess.run(
+        [sys.executable, "-m", "cmpsim.cli", "run", "--json", "--relative", "--set", "pad_compliance=rigid", "--grid", "coarse"],
+        capture_output=True, text=True, check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stderr == NAN_WARNING  # not "cli.py:NNN: RuntimeWarning: ...\n  result = solve(cfg, ...)"
+    assert json.loads(proc.stdout)["values"]["removal_rate_relative"] is None
+
+
+def test_the_warning_display_is_the_commands_own_and_restored_after_it():
+    import warnings
+
+    import cmpsim.cli
+
+    before = warnings.showwarning
+    res = CliRunner().invoke(main, ["run", "--json", "--relative", "--set", "pad_compliance=rigid", "--grid", "coarse"])
+    assert res.exit_code == 0, res.output
+    assert res.stderr == NAN_WARNING
+    assert warnings.showwarning is before  # importing or running the CLI leaves the library's warnings alone
+    # another package's warning keeps Python's format (its source says where it comes from)
+    seen = []
+    cmpsim.cli.show_warning("not ours", UserWarning, "/elsewhere/pkg/mod.py", 7, other=lambda *a: seen.append(a))
+    assert seen == [("not ours", UserWarning, "/elsewhere/pkg/mod.py", 7, None, None)]
+
+
+def test_the_run_tables_warnings_are_one_line_each_on_stderr():
+    """The hydrodynamic variant of the paper's model equilibrates outside the flow factors' validity
+    (docs/limitations.md): the table goes to stdout, the warning to stderr in the one format."""
+    res = CliRunner().invoke(main, ["run", "--preset", "paper", "--set", "model=hydrodynamic", "--grid", "coarse"])
+    assert res.exit_code == 0, res.output
+    lines = res.stderr.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("cmpsim: warning: the flow-factor tensor was regularised on "), res.stderr
+    assert "warning" not in res.stdout.replace("regularised", "")
+
+
 def test_every_solving_command_takes_its_inputs_the_same_way(tmp_path, monkeypatch):
     """--config, --preset, --set and --grid on run, reproduce, validate and calibrate; `run FILE` is `run --config FILE`."""
     import cmpsim

@@ -22,6 +22,29 @@ def test_importing_any_module_runs_no_import_loop():
     assert import_cycles(SRC) == []
 
 
+def test_units_and_config_do_not_need_each_other():
+    """The parameter registry hands its entries to cmpsim.units; units never imports config,
+    not even inside a function (issue 22: the config <-> units circle)."""
+    cycles = import_cycles(SRC, top_level_only=False)
+    assert not [c for c in cycles if {"cmpsim.units", "cmpsim.config"} & set(c)], cycles
+    assert "cmpsim.config" not in imports_of(SRC / "units.py", "cmpsim.units")
+
+
+def _package(tmp_path, modules: dict[str, str]):
+    """A package ``cmpsim`` under ``tmp_path`` with the given {module: source}."""
+    root = tmp_path / "cmpsim"
+    root.mkdir()
+    for name, text in {"__init__": "", **modules}.items():
+        (root / f"{name}.py").write_text(text)
+    return root
+
+
+def test_the_cycle_check_sees_imports_inside_functions(tmp_path):
+    root = _package(tmp_path, {"config": "from . import units\n", "units": "def f():\n    from .config import PARAMETERS\n"})
+    assert import_cycles(root) == []
+    assert import_cycles(root, top_level_only=False) == [["cmpsim.config", "cmpsim.units", "cmpsim.config"]]
+
+
 def test_every_room_of_the_table_exists_and_every_module_has_a_floor():
     modules = source_modules(SRC)
     rooms = {n.split(".")[1] if "." in n else n for n in modules}
@@ -32,13 +55,77 @@ def test_every_room_of_the_table_exists_and_every_module_has_a_floor():
 
 def test_the_rule_catches_an_upward_import(tmp_path):
     """A kernel importing the config, and the solver importing a study, are both reported."""
-    root = tmp_path / "cmpsim"
-    root.mkdir()
-    (root / "__init__.py").write_text("")
-    (root / "config.py").write_text("")
-    (root / "studies.py").write_text("")
-    (root / "contact.py").write_text("from .config import PARAMETERS\n")
-    (root / "equilibrium.py").write_text("def f():\n    from cmpsim.studies import solve_point\n")
+    root = _package(
+        tmp_path,
+        {"config": "", "studies": "", "contact": "from .config import PARAMETERS\n", "equilibrium": "def f():\n    from cmpsim.studies import solve_point\n"},
+    )
     found = violations(root)
     assert any(v.startswith("cmpsim.contact is a kernel and imports cmpsim.config") for v in found), found
     assert any(v.startswith("cmpsim.equilibrium imports cmpsim.studies") for v in found), found
+
+
+def test_no_module_outside_the_registry_tests_a_model_option_by_name():
+    """Each model axis is a family of classes picked by name in cmpsim.models (and checked in
+    cmpsim.config); the solver, the Reynolds assembly and the post-processing ask the objects.
+    On b10a4ba this scan found 17 places (issue 22)."""
+    from cmpsim.testing.house import option_name_comparisons
+
+    assert option_name_comparisons(SRC) == []
+
+
+def test_the_option_scan_catches_a_name_test(tmp_path):
+    from cmpsim.testing.house import option_name_comparisons
+
+    root = tmp_path / "cmpsim"
+    root.mkdir()
+    (root / "__init__.py").write_text("")
+    (root / "config.py").write_text("ok = cfg.cavitation == 'jfo'\n")  # config checks its inputs: allowed
+    (root / "equilibrium.py").write_text(
+        "a = problem.cavitation == 'jfo'\n"
+        "b = 'granular' != lub.slurry_model\n"
+        "c = config.removal_law in ('paper', 'shear_power')\n"
+        "d = carrier not in ['rigid']\n"
+        "e = problem.variant == 'hydrodynamic'\n"  # not a model axis of the registry
+        "f = problem.cavitation == other\n"  # not a string
+    )
+    found = option_name_comparisons(root)
+    assert [line.split(":")[1] for line in found] == ["1", "2", "3", "4"], found
+
+
+def test_every_option_value_has_a_class_behind_its_protocol():
+    """The registry covers exactly the values Config accepts, and each class implements its protocol."""
+    from cmpsim import models
+    from cmpsim.config import PARAMETERS, Config
+
+    axes = {
+        "pad_compliance": (models.PAD_MODELS, models.PadModel),
+        "slurry_model": (models.SLURRY_MODELS, None),
+        "cavitation": (models.CAVITATION_MODELS, models.CavitationModel),
+        "removal_law": (models.REMOVAL_LAWS, None),
+        "carrier": (models.CARRIERS, models.CarrierModel),
+    }
+    for option, (registry, protocol) in axes.items():
+        assert set(registry) == set(PARAMETERS[option].choices), option
+        for name, cls in registry.items():
+            assert cls.name == name
+    cfg = Config.default()
+    for name in models.PAD_MODELS:
+        assert isinstance(models.pad_model(cfg.replace(pad_compliance=name)), models.PadModel)
+    for name in models.REMOVAL_LAWS:
+        assert isinstance(models.removal_law(cfg.replace(removal_law=name)), models.RemovalLaw)
+    for cav in models.CAVITATION_MODELS:
+        assert isinstance(models.slurry_model("newtonian", cav, -1e4, 3e4), models.SlurryModel)
+    assert isinstance(models.carrier("rigid"), models.CarrierModel)
+
+
+def test_the_registry_refuses_unknown_names_and_inapplicable_cavitation():
+    import pytest
+
+    from cmpsim import models
+
+    with pytest.raises(ValueError, match=r"carrier must be one of \('rigid',\); got 'membrane'"):
+        models.carrier("membrane")
+    with pytest.raises(ValueError, match="applies to the Newtonian slurry only"):
+        models.slurry_model("granular", "gumbel", -1e4, 3e4)
+    with pytest.raises(ValueError, match=r"cavitation_pressure must be a gauge pressure"):
+        models.slurry_model("newtonian", "jfo", None, 3e4)

@@ -223,6 +223,11 @@ def test_sweep_killed_with_sigkill_resumes_to_the_uninterrupted_result(tmp_path)
     assert (resumed["status"].values == "ok").all() and resumed["status"].size == 24
 
 
+#: Seconds a Ctrl-C'd sweep may take to end: the bounded close of client and cluster
+#: (2 x cmpsim.sweeps.executors.INTERRUPT_CLOSE_SECONDS) and the kill, with room for a loaded machine.
+CTRL_C_BOUND = 45.0
+
+
 @pytest.mark.slow
 def test_ctrl_c_saves_the_finished_points_and_exits_130_without_worker_tracebacks(tmp_path):
     path = write(tmp_path, KILL)
@@ -236,7 +241,15 @@ def test_ctrl_c_saves_the_finished_points_and_exits_130_without_worker_traceback
     try:
         wait_for_parts(parts, 1, proc)
         os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C in a terminal does: the whole process group
-        stdout, stderr = proc.communicate(timeout=120)
+        t0 = time.monotonic()
+        try:
+            # hard bound: the clean-up is bounded by 2 x INTERRUPT_CLOSE_SECONDS, then the workers are killed
+            stdout, stderr = proc.communicate(timeout=CTRL_C_BOUND)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            out_, err_ = proc.communicate()
+            pytest.fail(f"the sweep was still running {CTRL_C_BOUND} s after Ctrl-C; stdout={out_!r} stderr={err_!r}")
+        waited = time.monotonic() - t0
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
@@ -247,6 +260,7 @@ def test_ctrl_c_saves_the_finished_points_and_exits_130_without_worker_traceback
     k = int(line.split()[1])
     assert k == 1 and n_parts(parts) == 1
     assert "Traceback" not in stderr and not out.exists()
+    assert waited < CTRL_C_BOUND
 
 
 def test_interrupted_serial_sweep_keeps_exactly_the_finished_points_and_resumes_to_the_same_dataset(tmp_path, monkeypatch):
@@ -470,3 +484,34 @@ def test_warm_start_agrees_with_cold_start_and_never_costs_more_solves(model, ax
     assert int(warm["iterations"].sum()) <= int(cold["iterations"].sum())
     if model == "hydrodynamic":
         assert int(warm["factorizations"].sum()) < 0.6 * int(cold["factorizations"].sum())
+
+
+def test_a_close_that_hangs_is_given_up_within_its_bound_and_a_failed_one_is_not_finished():
+    import threading
+
+    from cmpsim.sweeps.executors import _close_within
+
+    never = threading.Event()
+    t0 = time.monotonic()
+    assert _close_within(never.wait, 0.3) is False
+    assert time.monotonic() - t0 < 5.0
+    assert _close_within(lambda: None, 5.0) is True
+
+    def broken():
+        raise RuntimeError("scheduler gone")
+
+    assert _close_within(broken, 5.0) is False
+
+
+def test_the_child_processes_of_an_interrupted_run_are_killed():
+    from cmpsim.sweeps.executors import _kill_child_processes
+
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"])
+    try:
+        t0 = time.monotonic()
+        assert _kill_child_processes() >= 1
+        child.wait(timeout=10)  # reaped already by the kill (its status is then unknown to Popen); it sleeps 600 s otherwise
+        assert time.monotonic() - t0 < 10
+    finally:
+        if child.poll() is None:
+            child.kill()

@@ -8,6 +8,7 @@ The sweeps run on a one-worker local Dask cluster that the application starts at
 from __future__ import annotations
 
 import json
+import re
 import socket
 import sys
 import time
@@ -367,8 +368,27 @@ def test_the_page_and_its_scripts_are_served_with_their_types(client):
         r = client.get(path)
         assert r.status_code == 200 and r.headers["content-type"].startswith(kind), path
         assert r.headers["x-content-type-options"] == "nosniff"
-    page = client.get("/").text + client.get("/static/app.js").text
+    # the page is ES modules: app.js and every module it imports, directly or not, are served as JavaScript
+    assert '<script type="module" src="/static/app.js">' in client.get("/").text
+    seen, todo = set(), ["app.js"]
+    while todo:
+        name = todo.pop()
+        r = client.get(f"/static/{name}")
+        assert r.status_code == 200 and r.headers["content-type"].startswith("text/javascript"), name
+        seen.add(name)
+        todo += [m for m in re.findall(r'from "\./([\w.-]+\.js)"', r.text) if m not in seen]
+    assert {"form.js", "plots.js", "sweep.js", "results.js"} <= seen, seen
+    page = client.get("/").text + "".join(client.get(f"/static/{n}").text for n in sorted(seen))
     assert "/static/plotly.min.js" in page and "http://" not in page and "https://" not in page
+
+
+def test_every_file_of_the_static_folder_is_on_the_served_list():
+    """A new module of the page must be listed in STATIC_FILES, or the page cannot load it."""
+    from cmpsim.web.page import STATIC_FILES, static_dir
+
+    files = {p.name for p in static_dir().iterdir() if p.is_file()}
+    assert files <= set(STATIC_FILES), files - set(STATIC_FILES)
+    assert set(STATIC_FILES) - {"plotly.min.js"} <= files, set(STATIC_FILES) - files
 
 
 TRAVERSALS = [
@@ -446,7 +466,7 @@ def test_serve_says_where_to_point_the_browser_and_warns_off_loopback(monkeypatc
     monkeypatch.setenv("CMPSIM_TOKEN", "t0k")
     res = CliRunner().invoke(main, ["serve", "--host", "0.0.0.0", "--max-jobs", "3"])
     assert res.exit_code == 0, res.output
-    assert "warning: --host 0.0.0.0" in res.stderr and "?token=t0k" in res.stdout
+    assert "cmpsim: warning: --host 0.0.0.0 makes the server reachable" in res.stderr and "?token=t0k" in res.stdout
     app = calls[-1][0]
     assert app.state.limits.max_jobs == 3
     with TestClient(app) as c:

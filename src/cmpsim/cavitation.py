@@ -42,6 +42,7 @@ from .reynolds import FaceCoefficients, assemble_operator, face_fluxes, factoriz
 
 __all__ = [
     "CAVITATION_MODELS",
+    "VACUUM_GAUGE_PRESSURE",
     "CavitationError",
     "upwind_couette_matrix",
     "reduced_matrix",
@@ -51,6 +52,10 @@ __all__ = [
 
 #: Cavitation treatments of the Newtonian slurry.
 CAVITATION_MODELS = ("none", "gumbel", "jfo")
+
+#: Gauge pressure of absolute vacuum, Pa (one standard atmosphere below ambient): the lowest
+#: admissible cavitation pressure.
+VACUUM_GAUGE_PRESSURE = -101325.0
 
 
 class CavitationError(RuntimeError):

@@ -12,10 +12,15 @@ repeatable) and the grid (``--grid``), in that order. ``cmpsim run FILE`` is the
 
 from __future__ import annotations
 
+import functools
+import os
 import sys
+import warnings
 from pathlib import Path
 
 import click
+
+from ._version import __version__
 
 EXIT_INPUT = 2
 EXIT_NO_EQUILIBRIUM = 3
@@ -24,6 +29,12 @@ EXIT_NO_EQUILIBRIUM = 3
 def _fail(message: str, code: int = EXIT_INPUT):
     click.echo(f"cmpsim: error: {message}", err=True)
     sys.exit(code)
+
+
+def _warn(message: str) -> None:
+    """A warning of cmpsim as the command line prints every one: ``cmpsim: warning: <message>``, one line on stderr."""
+    text = " ".join(str(message).split())
+    click.echo(f"cmpsim: warning: {text}", err=True)
 
 
 def parse_assignments(items) -> dict[str, str]:
@@ -75,10 +86,31 @@ def _rich_table(title, header, rows):
     return t
 
 
+_PACKAGE = Path(__file__).resolve().parent
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None, other=warnings.showwarning):
+    """``warnings.showwarning`` of the command line: a warning raised in cmpsim's code is one
+    line on stderr, ``cmpsim: warning: <message>``, without Python's file, line and source echo;
+    other packages' warnings go to ``other`` (Python's format: their source says where they come from)."""
+    try:
+        ours = Path(filename).resolve().is_relative_to(_PACKAGE)
+    except (TypeError, ValueError, OSError):
+        ours = False
+    if not ours:
+        other(message, category, filename, lineno, file, line)
+        return
+    _warn(str(message))
+
+
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(package_name="cmpsim")
-def main():
+@click.version_option(version=__version__, prog_name="cmpsim")  # the source's version, not an install's metadata
+@click.pass_context
+def main(ctx):
     """cmpsim: wafer-scale CMP simulator (grain-flow lubrication + pad asperity contact)."""
+    # for this command only (restored when it ends): importing cmpsim changes no warning display
+    ctx.with_resource(warnings.catch_warnings())
+    warnings.showwarning = functools.partial(show_warning, other=warnings.showwarning)
 
 
 @main.command()
@@ -117,7 +149,7 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
         _fail(str(exc))
     schema = int(schema)
     if schema == 1:
-        click.echo("cmpsim: warning: --schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)", err=True)
+        _warn("--schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)")
     if out_dir:
         write_outputs(result, Path(out_dir), schema=schema)
     if as_json:
@@ -128,15 +160,15 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
     console = Console()
     console.print(result.summary_table(console.width))
     if result.flow_factor_floored_fraction > 0:
-        console.print(
-            f"[yellow]warning: the flow-factor tensor was regularised on {100 * result.flow_factor_floored_fraction:.1f} % "
-            "of the faces: the film is outside the validity of the perturbation flow factors (docs/model.md)[/yellow]"
+        _warn(
+            f"the flow-factor tensor was regularised on {100 * result.flow_factor_floored_fraction:.1f} % "
+            "of the faces: the film is outside the validity of the perturbation flow factors (docs/model.md)"
         )
     if result.root_scan is not None and len(result.root_scan.roots) != 1:
         roots = ", ".join(f"{r:.3g}" for r in result.root_scan.roots) or "none"
-        console.print(
-            f"[yellow]warning: the attack-angle scan found {len(result.root_scan.roots)} moment roots "
-            f"(at {roots} rad); the equilibrium above is the one Newton reached from the default start[/yellow]"
+        _warn(
+            f"the attack-angle scan found {len(result.root_scan.roots)} moment roots "
+            f"(at {roots} rad); the equilibrium above is the one Newton reached from the default start"
         )
     if out_dir:
         console.print(f"wrote {out_dir}/fields.nc, maps.png, profile.png, result.json, config.toml")
@@ -216,7 +248,7 @@ def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, 
     where = f"Dask cluster at {scheduler}" if scheduler else ("this process (no Dask)" if workers == 0 else "a local Dask cluster")
     click.echo(f"sweep: {spec.n_points} points ({' x '.join(f'{d} {n}' for d, n in zip(spec.dims, spec.shape))}) on {where} -> {out}")
     for message in spec.invalid_values():
-        click.echo(f"warning: {message}; the points with this value will be recorded as invalid", err=True)
+        _warn(f"{message}; the points with this value will be recorded as invalid")
     t0 = _time.perf_counter()
     try:
         ds = run_sweep(
@@ -233,7 +265,12 @@ def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, 
     except SweepError as exc:
         _fail(str(exc))
     except KeyboardInterrupt:
-        sys.exit(130)
+        # The finished points are saved and the cluster closed (or its workers killed) within a
+        # bound by now; exit at once, so that no interpreter-exit hook (Dask closes clusters
+        # at exit) can wait on a worker that is still busy.
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(130)
     elapsed = _time.perf_counter() - t0
     for line in summary_lines(ds):
         click.echo(line)
@@ -428,7 +465,7 @@ def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_b
         _fail(str(exc).replace("max_grid:", "--max-grid:"))
     if workers is not None and scheduler is not None:
         _fail("give either --workers (a local cluster) or --scheduler (an existing cluster), not both")
-    serve(host, port, limits=limits, token=token or None, workers=workers, scheduler=scheduler, echo=click.echo, warn=lambda m: click.echo(m, err=True))
+    serve(host, port, limits=limits, token=token or None, workers=workers, scheduler=scheduler, echo=click.echo, warn=_warn)
 
 
 # ---- end serve command ----

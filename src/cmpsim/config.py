@@ -28,6 +28,7 @@ __all__ = [
     "Numerics",
     "Config",
     "parse_value",
+    "parameter",
     "parameter_table_markdown",
     "GRID_PRESETS",
     "GRID_EDGE",
@@ -90,8 +91,8 @@ class Param:
         """Human-readable valid range, in the display unit (``cmpsim params``)."""
         if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
             return self.range_text()
-        lo = "-inf" if self.low is None else f"{to_display(self.name, self.low):.6g}"
-        hi = "inf" if self.high is None else f"{to_display(self.name, self.high):.6g}"
+        lo = "-inf" if self.low is None else f"{units.to_display(self, self.low):.6g}"
+        hi = "inf" if self.high is None else f"{units.to_display(self, self.high):.6g}"
         lb = "(" if (self.low is None or self.low_open) else "["
         hb = ")" if (self.high is None or self.high_open) else "]"
         return f"{lb}{lo}, {hi}{hb} {self.display}"
@@ -112,6 +113,7 @@ PARAMETERS: dict[str, Param] = {
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
+        _P("carrier", "process", "-", "choice", "", "rigid", "Wafer carrier: a rigid wafer held at a pivot at the centre of its face, under a uniform applied pressure (the paper)", "Paper eq. 30-31; docs/model.md ('Force and moment balance')", choices=("rigid",)),
         _P("removal_law", "process", "-", "choice", "", "shear_power", "Removal law: the paper's RR = K sigma_n tau, or the shear-power law RR = k_s (mu p_c + chi tau_f) |du|", "docs/model.md ('Removal rate'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023)", choices=("paper", "shear_power")),
         _P("shear_power_coefficient", "process", "k_s", "1/Pa", "1/Pa", 2.5e-13, "Scale k_s of the shear-power removal law", "Scale only: k_s mu = 1e-13 1/Pa, the order of oxide Preston constants (Preston's k_p P U gives ~100 nm/min at 4 psi and 0.63 m/s); see docs/model.md", 0.0),
         _P("fluid_shear_weight", "process", "chi", "", "", 0.0, "Share chi of the slurry's shear power that removes material in the shear-power law", "docs/model.md ('Removal rate'): removal needs abrasive contact pressure, which the slurry's bulk shear does not give", 0.0, 1.0, False, False),
@@ -250,13 +252,20 @@ def _parse_grid(value: Any) -> str:
     return f"{nr}x{nt}"
 
 
+def parameter(name: str) -> Param:
+    """The registry entry of input ``name``; ``ValueError`` listing the known names if there is none."""
+    if name not in PARAMETERS:
+        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+    return PARAMETERS[name]
+
+
 def parse_value(name: str, value: Any) -> Any:
     """Convert one input to its SI value, checking unit dimension and range (:func:`cmpsim.units.parse`).
 
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number
     (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
     """
-    return units.parse(name, value)
+    return units.parse(parameter(name), value)
 
 
 def _section_fields(section: str) -> list[str]:
@@ -422,12 +431,12 @@ class Config:
 
 def to_display(name: str, value: Any) -> Any:
     """SI value of a parameter converted to its display unit (strings unchanged; :func:`cmpsim.units.to_display`)."""
-    return units.to_display(name, value)
+    return units.to_display(parameter(name), value)
 
 
 def format_display(name: str, value: Any) -> str:
     """SI value of a parameter as display text (:func:`cmpsim.units.format_display`)."""
-    return units.format_display(name, value)
+    return units.format_display(parameter(name), value)
 
 
 def parameter_table_markdown() -> str:

@@ -17,7 +17,7 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["PolarGrid", "graded_ring_faces", "ring_count", "edge_graded_grid"]
+__all__ = ["PolarGrid", "FaceOperators", "face_operators", "graded_ring_faces", "ring_count", "edge_graded_grid"]
 
 #: Points of the table from which the graded ring map is inverted (its error, ~1e-9 R_w, is
 #: far below any ring width; the same table serves every refinement of a map).
@@ -313,3 +313,62 @@ class PolarGrid:
     def index(self, i, j) -> np.ndarray:
         """Linear unknown index of cell (i, j), with j taken modulo n_theta."""
         return np.asarray(i) * self.n_theta + np.mod(j, self.n_theta)
+
+
+@dataclass(frozen=True)
+class FaceOperators:
+    """Cell -> face interpolation and face -> cell divergence of the polar grid (sparse)."""
+
+    interp_radial: sp.csr_matrix  # radial faces x cells
+    interp_angular: sp.csr_matrix  # angular faces x cells
+    div_radial: sp.csr_matrix  # cells x radial faces: +1 for the cell inside, -1 outside
+    div_angular: sp.csr_matrix  # cells x angular faces: +1 clockwise cell, -1 counter-clockwise
+    ring_parity: np.ndarray  # (n_r, n_theta) ring index % 2
+    sector_parity: np.ndarray  # (n_r, n_theta) sector index % 2
+
+
+_OPERATORS: dict = {}
+
+
+def face_operators(grid: PolarGrid) -> FaceOperators:
+    """The :class:`FaceOperators` of a grid (built once per grid and cached).
+
+    Radial face (i, j) is the outer face of cell (i, j); the film on it is interpolated linearly
+    in r between the two cells beside it (their mean on equal rings), extrapolated over the last
+    half ring at the rim (:attr:`PolarGrid.radial_face_weights`). Angular face (i, j) is the
+    counter-clockwise face of cell (i, j), shared with (i, j + 1).
+    """
+    import scipy.sparse as sp
+
+    ops = _OPERATORS.get(grid)
+    if ops is not None:
+        return ops
+    n_r, n_t, n = grid.n_r, grid.n_theta, grid.size
+    i = np.repeat(np.arange(n_r), n_t)
+    j = np.tile(np.arange(n_t), n_r)
+    f = np.arange(n)
+    inner = i < n_r - 1
+    P = grid.index(i, j)
+    # radial face (i, j) is the outer face of cell (i, j)
+    out = grid.index(np.minimum(i + 1, n_r - 1), j)
+    prev = grid.index(np.maximum(i - 1, 0), j)
+    rows = np.concatenate([f, f])
+    cols = np.concatenate([P, np.where(inner, out, prev)])
+    own, other = grid.radial_face_weights  # linear in r between the centres (1/2, 1/2 on equal rings)
+    vals = np.concatenate([own[i, 0], other[i, 0]])
+    interp_r = sp.csr_matrix((vals, (rows, cols)), shape=(n, n))
+    div_r = sp.csr_matrix(
+        (np.concatenate([np.ones(n), -np.ones(inner.sum())]), (np.concatenate([P, out[inner]]), np.concatenate([f, f[inner]]))),
+        shape=(n, n),
+    )
+    # angular face (i, j) is the counter-clockwise face of cell (i, j), shared with (i, j + 1)
+    ccw = grid.index(i, j + 1)
+    interp_a = sp.csr_matrix((np.full(2 * n, 0.5), (np.concatenate([f, f]), np.concatenate([P, ccw]))), shape=(n, n))
+    div_a = sp.csr_matrix((np.concatenate([np.ones(n), -np.ones(n)]), (np.concatenate([P, ccw]), np.concatenate([f, f]))), shape=(n, n))
+    ops = FaceOperators(
+        interp_r, interp_a, div_r, div_a, (i % 2).reshape(n_r, n_t), (j % 2).reshape(n_r, n_t)
+    )
+    if len(_OPERATORS) > 16:
+        _OPERATORS.clear()
+    _OPERATORS[grid] = ops
+    return ops

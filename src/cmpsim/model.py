@@ -34,7 +34,9 @@ def wants_relative(config: Config) -> bool:
     law (the paper preset), whose figures 11-12 are in removal rate relative to the reference
     case. The predictive removal law gives absolute rates (m/s), and its reference solve would
     double the cost of a first solve; ask for it with ``relative=True`` (``--relative``)."""
-    return config.removal_law == "paper"
+    from .models import removal_law
+
+    return removal_law(config).relative_by_default
 
 
 def _reference_removal_rate(ref: Config) -> float:

@@ -12,12 +12,11 @@ import numpy as np
 
 from . import outputs, uniformity
 from .config import Config
-from .equilibrium import EquilibriumSolution, WaferProblem
-from .flowfactors import shear_stress_factors
-from .grainflow import GrainFlow, grain_coefficients
-from .removal import contact_shear_stress, newtonian_shear_stress, removal_rate, shear_power_removal_rate, slurry_shear_stress
-from .reynolds import NEWTONIAN_GRAIN_COEFFICIENT
+from .models import removal_law as _removal_law
+from .removal import contact_shear_stress
 from .setup import PhysicalSetup
+from .state import EquilibriumSolution
+from .wafer import WaferProblem
 
 __all__ = ["evaluate_outputs", "reduce_outputs"]
 
@@ -34,24 +33,11 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     # shear stress and removal rate
     _, _, dux, duy = setup.kinematics.mean_and_relative(xc, yc)
     ar = st.area_ratio
-    newtonian = lub.slurry_model == "newtonian"
-    if newtonian:
-        # p_slurry is the gauge pressure acting on the wafer; the normal stress of the paper's
-        # removal law takes its compressive part (docs/model.md, "Newtonian slurry and cavitation")
-        grad_p = g.gradient(st.p_slurry, 0.0)
-        f = np.full(st.h.shape, NEWTONIAN_GRAIN_COEFFICIENT)
-        phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
-        theta = 1.0 if st.fill_fraction is None else st.fill_fraction
-        tsx, tsy = newtonian_shear_stress(grad_p, st.h, (dux, duy), lub.viscosity, phi_fs, phi_fp, theta)
-        p_normal = np.maximum(st.p_slurry, 0.0)
-    else:
-        grad_phi = g.gradient(st.phi, 0.0)
-        grad_p = (st.p_slurry * grad_phi[0], st.p_slurry * grad_phi[1])
-        _, f, _ = grain_coefficients(st.h / lub.particle_diameter, lub.w_over_k)
-        phi_fs, phi_fp = shear_stress_factors(st.h / setup.roughness.sigma, f, setup.roughness)
-        grain = GrainFlow(lub.particle_diameter, lub.w_over_k, lub.t_over_a, lub.fluctuation_velocity)
-        tsx, tsy = slurry_shear_stress(st.p_slurry, grad_p, st.h, (dux, duy), grain, phi_fs=phi_fs, phi_fp=phi_fp)
-        p_normal = st.p_slurry
+    slurry = problem.slurry
+    # the slurry's shear on the wafer and the normal stress the removal law sees (for a
+    # Newtonian slurry the compressive part of the gauge pressure; docs/model.md)
+    tsx, tsy = slurry.shear_stress(st, g, lub, (dux, duy))
+    p_normal = slurry.normal_pressure(st.p_slurry)
     tau_x = (1.0 - ar) * tsx
     tau_y = (1.0 - ar) * tsy
     if config.removal_shear == "total":
@@ -59,13 +45,17 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         tau_x, tau_y = tau_x + tcx, tau_y + tcy
     tau = np.hypot(tau_x, tau_y)
     sigma_n = (1.0 - ar) * p_normal + st.p_contact
-    if config.removal_law == "shear_power":
-        rr = shear_power_removal_rate(
-            st.p_contact, np.hypot((1.0 - ar) * tsx, (1.0 - ar) * tsy), np.hypot(dux, duy),
-            config.shear_power_coefficient, config.friction_coefficient, config.fluid_shear_weight,
-        )
-    else:
-        rr = removal_rate(sigma_n, (tau_x, tau_y), config.preston_coefficient)
+    # the removal law takes the fields it names (cmpsim.models.removal_laws.REMOVAL_FIELDS)
+    law = setup.removal_law or _removal_law(config)
+    fields = {
+        "normal_stress": lambda: sigma_n,
+        "shear_stress": lambda: (tau_x, tau_y),
+        "contact_pressure": lambda: st.p_contact,
+        "fluid_shear_stress": lambda: ((1.0 - ar) * tsx, (1.0 - ar) * tsy),
+        "relative_speed": lambda: np.hypot(dux, duy),
+        "film_thickness": lambda: st.h,
+    }
+    rr = law.rate(**{name: fields[name]() for name in law.needs})
     # film thickness: centre, and minimum over the cell centres and the rim
     u = st.u
     h_rim = problem.film(u, *g.rim())
@@ -94,7 +84,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "attack_angle": float(u[1]),
         "cross_tilt": float(u[2]),
         # the slurry pressure at the wafer edge: p0 (granular), ambient = 0 gauge (Newtonian)
-        "ambient_pressure": 0.0 if newtonian else setup.ambient_pressure,
+        "ambient_pressure": slurry.edge_pressure(setup.ambient_pressure),
         "sliding_speed": setup.kinematics.sliding_speed,
         "load_residual": float(st.residual[0]),
         "moment_residual": float(max(abs(st.residual[1]), abs(st.residual[2]))),

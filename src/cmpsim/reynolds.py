@@ -44,6 +44,9 @@ from .sparse import factorize as guarded_factorize
 
 __all__ = [
     "SLURRY_MODELS",
+    "RHEOLOGIES",
+    "GrainFlowRheology",
+    "NewtonianRheology",
     "NEWTONIAN_GRAIN_COEFFICIENT",
     "LubricationParameters",
     "FaceCoefficients",
@@ -59,12 +62,41 @@ __all__ = [
 ]
 
 
-#: Slurry rheologies: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (in p).
-SLURRY_MODELS = ("granular", "newtonian")
-
 #: The grain-size coefficients f and g at x = sqrt(w/k) h/d -> 0 (eq. 18-19), used by the
 #: Newtonian slurry: isotropic roughness then gives Tripp's Phi^p = 1 - 1.5 (sigma/h)^2.
 NEWTONIAN_GRAIN_COEFFICIENT = 3.0
+
+
+class GrainFlowRheology:
+    """Haff grain flow (the paper, eq. 5): unknown ln(p/p0), D = (1/6)(t/a) v Psi h^2 Phi^p."""
+
+    name = "granular"
+
+    @staticmethod
+    def film_coefficients(h, params: "LubricationParameters"):
+        """(c, f, g) at film h (m): D = c Phi^p (m^3/s), f and g the grain-size coefficients (eq. 18-19)."""
+        psi, f, g = grain_coefficients(h / params.particle_diameter, params.w_over_k)
+        return params.t_over_a * params.fluctuation_velocity * psi * h * h / 6.0, f, g
+
+
+class NewtonianRheology:
+    """A Newtonian liquid: unknown the gauge pressure p, D = h^3/(12 eta) Phi^p with f = g = 3."""
+
+    name = "newtonian"
+
+    @staticmethod
+    def film_coefficients(h, params: "LubricationParameters"):
+        """(c, f, g) at film h (m): D = c Phi^p (m^4/(Pa s)), f = g = 3 (the x -> 0 limit)."""
+        f = g = np.full(h.shape, NEWTONIAN_GRAIN_COEFFICIENT)
+        return h * h * h / (12.0 * params.viscosity), f, g
+
+
+#: The rheology of the Reynolds coefficients of each ``slurry_model`` (the slurry models of
+#: :mod:`cmpsim.models.slurries` own the rest: unknown, cavitation, shear). The public
+#: :class:`LubricationParameters` takes the name, so the discretisation resolves it here.
+RHEOLOGIES = {r.name: r for r in (GrainFlowRheology, NewtonianRheology)}
+#: Slurry rheologies: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (in p).
+SLURRY_MODELS = tuple(RHEOLOGIES)
 
 
 @dataclass(frozen=True)
@@ -107,6 +139,11 @@ class LubricationParameters:
         if not (np.isfinite(self.viscosity) and self.viscosity > 0):
             raise ValueError(f"slurry_viscosity must be finite and > 0 Pa s (valid range: (0, inf)); got {self.viscosity!r}")
 
+    @property
+    def rheology(self):
+        """The :data:`RHEOLOGIES` entry of ``slurry_model`` (its Reynolds coefficients)."""
+        return RHEOLOGIES[self.slurry_model]
+
 
 @dataclass
 class FaceCoefficients:
@@ -138,16 +175,9 @@ def lubrication_coefficients(h, x, y, params: LubricationParameters, velocities=
         raise ValueError("film thickness must be finite and > 0 m everywhere on the wafer (the wafer touches the pad mean plane)")
     rough = params.roughness
     hs = h / rough.sigma
-    if params.slurry_model == "newtonian":
-        f = g = np.full(h.shape, NEWTONIAN_GRAIN_COEFFICIENT)
-    else:
-        psi, f, g = grain_coefficients(h / params.particle_diameter, params.w_over_k)
+    c, f, g = params.rheology.film_coefficients(h, params)
     pxx, pxy, pyy = pressure_flow_factors(hs, f, g, rough)
     pxx, pxy, pyy, floored = regularize_pressure_tensor(pxx, pxy, pyy, params.flow_factor_floor)
-    if params.slurry_model == "newtonian":
-        c = h * h * h / (12.0 * params.viscosity)
-    else:
-        c = params.t_over_a * params.fluctuation_velocity * psi * h * h / 6.0
     sxx, sxy, syy = shear_flow_factors(hs, f, rough)
     umx, umy, dux, duy = params.kinematics.mean_and_relative(x, y) if velocities is None else velocities
     half_sigma = 0.5 * rough.sigma

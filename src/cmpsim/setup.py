@@ -2,23 +2,26 @@
 
 Turns the user's inputs (:class:`~cmpsim.config.Config`, SI) into the pad surface, the
 roughness, the kinematics, the lubrication parameters, the ambient pressure and the grid,
-and builds the :class:`~cmpsim.equilibrium.WaferProblem` that the equilibrium solver takes.
+picks the models of the four axes by name (:mod:`cmpsim.models`, the registry: pad, slurry
+with its cavitation, removal law, carrier), and builds the
+:class:`~cmpsim.wafer.WaferProblem` that the equilibrium solver takes.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from .compliance import LayeredFoundation, PadLayer, WinklerFoundation
+from . import models
 from .config import Config
 from .contact import PadSurface
-from .equilibrium import WaferProblem
 from .flowfactors import RoughnessGeometry
 from .geometry import check_geometry
 from .grainflow import granular_pressure
 from .grid import PolarGrid
 from .kinematics import Kinematics
+from .padstack import LayeredFoundation, WinklerFoundation
 from .reynolds import LubricationParameters
+from .wafer import WaferProblem
 
 __all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "pad_foundation", "HAFF_T"]
 
@@ -37,6 +40,8 @@ class PhysicalSetup:
     ambient_pressure: float  # p0, Pa
     grid: PolarGrid
     foundation: WinklerFoundation | LayeredFoundation | None = None  # pad stack under the asperities; None = rigid
+    pad_model: models.PadModel | None = None  # picked by pad_compliance (cmpsim.models)
+    removal_law: models.RemovalLaw | None = None  # picked by removal_law (cmpsim.models)
 
 
 def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
@@ -46,14 +51,7 @@ def effective_modulus(e1: float, nu1: float, e2: float, nu2: float) -> float:
 
 def pad_foundation(config: Config) -> WinklerFoundation | LayeredFoundation | None:
     """The elastic foundation of the pad stack (top pad + subpad), or None if rigid."""
-    if config.pad_compliance == "rigid":
-        return None
-    layers = [PadLayer(config.pad_thickness, config.pad_bulk_modulus, config.pad_poisson)]
-    if config.subpad_thickness > 0:
-        layers.append(PadLayer(config.subpad_thickness, config.subpad_modulus, config.subpad_poisson))
-    if config.pad_compliance == "layer":
-        return LayeredFoundation(tuple(layers))
-    return WinklerFoundation.from_layers(layers)
+    return models.pad_model(config).foundation
 
 
 def physical_setup(config: Config) -> PhysicalSetup:
@@ -96,11 +94,12 @@ def physical_setup(config: Config) -> PhysicalSetup:
     )
     p0 = float(granular_pressure(c.granular_density, c.diameter_gap_ratio, v, t=HAFF_T))
     grid = c.polar_grid()
-    return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_foundation(config))
+    pad_model = models.pad_model(config)
+    return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_model.foundation, pad_model, models.removal_law(config))
 
 
 def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferProblem:
-    """The :class:`~cmpsim.equilibrium.WaferProblem` of a Config (``setup`` if already built)."""
+    """The :class:`~cmpsim.wafer.WaferProblem` of a Config (``setup`` if already built)."""
     s = setup or physical_setup(config)
     check_geometry(config.dome_height, s.grid.radius)
     return WaferProblem(
@@ -114,4 +113,7 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
         cavitation=config.cavitation,
         cavitation_pressure=config.cavitation_pressure,
         foundation=s.foundation,
+        pad_model=s.pad_model,
+        slurry=models.slurry_model(config.slurry_model, config.cavitation, config.cavitation_pressure, s.ambient_pressure),
+        carrier=models.carrier(config.carrier),
     )

@@ -3,10 +3,14 @@
 Inputs may be strings with units (``"4 psi"``, ``"60rpm"``, ``"100nm"``), pint Quantities, or
 plain numbers, which are taken as SI. Everything past this module carries SI floats.
 
-* :func:`parse`: an input of the parameter registry (:data:`cmpsim.config.PARAMETERS`) to its
-  SI value, checking the unit dimension and the valid range (``Config`` uses it for every
-  value it accepts; ``cmpsim.config.parse_value`` is this function).
+* :func:`parse`: an input described by an entry of the parameter registry
+  (:data:`cmpsim.config.PARAMETERS`) to its SI value, checking the unit dimension and the
+  valid range (``Config`` uses it for every value it accepts, through
+  ``cmpsim.config.parse_value``, which looks the name up and passes the entry in).
 * :func:`to_display`: an SI value of a parameter in its display unit (tables, the CLI).
+
+The dependency runs one way: ``cmpsim.config`` imports this module, never the reverse; the
+functions that take a parameter are handed its registry entry.
 * :func:`to_si` and :func:`convert`: any quantity given its unit (values of data files,
   sliding speeds, sweep axes before their range is checked, the paper's psi and rpm grids).
 
@@ -73,37 +77,40 @@ def convert(value: float, unit: str, to: str) -> float:
     return float(registry().Quantity(float(value), unit_text(unit)).to(unit_text(to)).magnitude)
 
 
-def _param(name: str):
-    # the registry of inputs lives with the Config on the same floor (cmpsim.config)
-    from .config import PARAMETERS
+def _entry(param):
+    if isinstance(param, str):
+        raise TypeError(
+            f"cmpsim.units takes a parameter entry (cmpsim.config.PARAMETERS[{param!r}]), not its name; "
+            "by name use cmpsim.config.parse_value, to_display or format_display"
+        )
+    return param
 
-    if name not in PARAMETERS:
-        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
-    return PARAMETERS[name]
 
+def parse(param, value: Any) -> Any:
+    """The SI value of the input described by ``param``, checking the unit dimension and the valid range.
 
-def parse(name: str, value: Any) -> Any:
-    """The SI value of input ``name``, checking the unit dimension and the valid range.
-
+    ``param`` is an entry of the parameter registry (a :class:`cmpsim.config.Param`: its
+    ``name``, SI ``unit``, ``display`` unit, ``choices`` and ``check``); the registry lives
+    with the ``Config`` and passes its entries in, so this module never imports it.
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number (taken
     as SI, not re-parsed). Choices and the grid are strings, checked against their options.
     Raises ``ValueError`` naming the parameter and its valid range.
     """
-    p = _param(name)
+    p = _entry(param)
     if p.choices or p.unit == "grid" or (isinstance(value, (int, float)) and not isinstance(value, bool)):
         return p.check(value)
-    return p.check(to_si(value, p.unit, name, example=p.display))
+    return p.check(to_si(value, p.unit, p.name, example=p.display))
 
 
-def to_display(name: str, value: Any) -> Any:
-    """SI value of input ``name`` in its display unit (strings unchanged)."""
-    p = _param(name)
+def to_display(param, value: Any) -> Any:
+    """SI value of the input described by ``param`` (a registry entry) in its display unit (strings unchanged)."""
+    p = _entry(param)
     if isinstance(value, str) or not p.display or p.display == p.unit:
         return value
     return registry().Quantity(value, p.unit).to(p.display).magnitude
 
 
-def format_display(name: str, value: Any) -> str:
-    """SI value of input ``name`` as display text (6 significant digits)."""
-    v = to_display(name, value)
+def format_display(param, value: Any) -> str:
+    """SI value of the input described by ``param`` (a registry entry) as display text (6 significant digits)."""
+    v = to_display(param, value)
     return v if isinstance(v, str) else f"{v:.6g}"

@@ -205,7 +205,54 @@ def _sigint_ignored():
         signal.signal(signal.SIGINT, old)
 
 
+#: Seconds the clean-up after a Ctrl-C may take (closing the client, then the cluster) before
+#: the worker processes are killed. A worker busy in a long point (a fine 300 mm solve) cannot
+#: be stopped by Dask between two bytecodes, so the bound is what ends the run "within seconds".
+INTERRUPT_CLOSE_SECONDS = 10.0
+
+
+def _close_within(close, seconds: float) -> bool:
+    """Call ``close()`` on a daemon thread and wait at most ``seconds``; True if it returned.
+
+    A close that hangs (a scheduler waiting on a blocked task, an event loop stuck) is left
+    behind on its daemon thread, which does not keep the interpreter alive.
+    """
+    import threading
+
+    box: list[BaseException] = []
+
+    def run():
+        try:
+            close()
+        except BaseException as exc:  # reported below; a failed close is not a finished one
+            box.append(exc)
+
+    thread = threading.Thread(target=run, name="cmpsim-close", daemon=True)
+    thread.start()
+    thread.join(seconds)
+    return not thread.is_alive() and not box
+
+
+def _kill_child_processes() -> int:
+    """SIGKILL every process this one started (the local cluster's workers); how many."""
+    import psutil  # a dependency of dask.distributed
+
+    children = psutil.Process().children(recursive=True)
+    for child in children:
+        with contextlib.suppress(psutil.Error):
+            child.kill()
+    psutil.wait_procs(children, timeout=5)
+    return len(children)
+
+
 def _with_client(scheduler, workers, chains, done, fn):
+    """Run ``fn(client)`` on the given scheduler or on a local cluster made for this sweep.
+
+    On a Ctrl-C (KeyboardInterrupt) the client and the local cluster are closed with a bound
+    of :data:`INTERRUPT_CLOSE_SECONDS` each; past it the cluster's worker processes are
+    killed, so the run ends within seconds whatever the workers are doing (the points already
+    finished are saved as they arrive, before this).
+    """
     from distributed import Client
 
     if scheduler is not None and not isinstance(scheduler, str):
@@ -217,14 +264,27 @@ def _with_client(scheduler, workers, chains, done, fn):
             raise SweepError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}") from None
         try:
             return fn(client)
+        except KeyboardInterrupt:
+            _close_within(client.close, INTERRUPT_CLOSE_SECONDS)
+            client = None
+            raise
         finally:
-            client.close()
+            if client is not None:
+                client.close()
     cluster = local_cluster(_local_workers(workers, chains, done))
+    client = None
     try:
         client = Client(cluster)
-        try:
-            return fn(client)
-        finally:
-            client.close()
+        return fn(client)
+    except KeyboardInterrupt:
+        closed = client is None or _close_within(client.close, INTERRUPT_CLOSE_SECONDS)
+        closed = _close_within(cluster.close, INTERRUPT_CLOSE_SECONDS) and closed
+        if not closed:
+            _kill_child_processes()
+        client = cluster = None
+        raise
     finally:
-        cluster.close()
+        if client is not None:
+            client.close()
+        if cluster is not None:
+            cluster.close()

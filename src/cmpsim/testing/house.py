@@ -16,13 +16,13 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-__all__ = ["FLOORS", "UTILITIES", "source_modules", "imports_of", "floor_of", "violations", "import_cycles"]
+__all__ = ["FLOORS", "UTILITIES", "MODEL_OPTIONS", "source_modules", "imports_of", "floor_of", "violations", "import_cycles", "option_name_comparisons"]
 
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("kernels", "pure vectorised physics, each function an equation of the paper; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "uniformity")),
-    ("discretisation", "the polar grid; the sparse Reynolds and cavitation systems", ("grid", "sparse", "reynolds", "cavitation")),
-    ("solver", "force and moment balance of the wafer (Newton), coupled with the pad deflection", ("equilibrium", "compliance")),
+    ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "padstack", "uniformity")),
+    ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems", ("grid", "sparse", "reynolds", "cavitation")),
+    ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection; load balance and Newton on the wafer position", ("state", "compliance", "models", "wafer", "loadbalance", "equilibrium")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
     ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "testing")),
@@ -119,10 +119,12 @@ def violations(root: Path) -> list[str]:
     return out
 
 
-def import_cycles(root: Path) -> list[list[str]]:
-    """Cycles of the imports run when modules are imported (top-level imports only)."""
+def import_cycles(root: Path, top_level_only: bool = True) -> list[list[str]]:
+    """Cycles of the imports run when modules are imported (top-level imports only), or with
+    ``top_level_only=False`` of every import, also those inside functions (two modules that
+    need each other, whichever waits until a call)."""
     modules = source_modules(root)
-    graph = {n: {_target(i, modules) for i in imports_of(p, n, top_level_only=True)} & set(modules) - {n} for n, p in modules.items()}
+    graph = {n: {_target(i, modules) for i in imports_of(p, n, top_level_only=top_level_only)} & set(modules) - {n} for n, p in modules.items()}
     cycles, state = [], {}
 
     def visit(node, stack):
@@ -140,3 +142,53 @@ def import_cycles(root: Path) -> list[list[str]]:
         if n not in state:
             visit(n, [])
     return cycles
+
+
+#: The inputs that pick a model (one class per value, chosen in :mod:`cmpsim.models`).
+MODEL_OPTIONS = ("pad_compliance", "slurry_model", "cavitation", "removal_law", "carrier", "removal_kinetics", "abrasive", "film")
+#: The modules allowed to read an option's name: where the inputs are checked and where the
+#: models are picked by name (the registry).
+OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models", "cmpsim.models.registry")
+
+
+def _option_ref(node: ast.AST) -> bool:
+    """``x.cavitation``, ``cavitation`` or ``x["cavitation"]``: a reference to a model option."""
+    if isinstance(node, ast.Attribute):
+        return node.attr in MODEL_OPTIONS
+    if isinstance(node, ast.Name):
+        return node.id in MODEL_OPTIONS
+    if isinstance(node, ast.Subscript) and isinstance(node.slice, ast.Constant):
+        return node.slice.value in MODEL_OPTIONS
+    return False
+
+
+def _str_constant(node: ast.AST) -> bool:
+    """A str constant, or a tuple / list / set literal holding one (``x in ("a", "b")``)."""
+    if isinstance(node, ast.Constant):
+        return isinstance(node.value, str)
+    if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
+        return any(_str_constant(e) for e in node.elts)
+    return False
+
+
+def option_name_comparisons(root: Path, allowed=OPTION_READERS) -> list[str]:
+    """Every comparison of a model option's name with a string outside ``allowed``.
+
+    A ``Compare`` node of the AST one of whose operands refers to a model option
+    (:data:`MODEL_OPTIONS`: ``problem.cavitation``, ``slurry_model``, ...) and another is a
+    string constant or a literal collection of strings (``== "jfo"``, ``in ("gumbel", "jfo")``).
+    Returns ``'module:line: source'`` lines. New physics adds a class to :mod:`cmpsim.models`,
+    not a branch on a name in the solver.
+    """
+    out = []
+    for name, path in source_modules(Path(root)).items():
+        if name in allowed:
+            continue
+        text = Path(path).read_text(encoding="utf-8")
+        for node in ast.walk(ast.parse(text)):
+            if not isinstance(node, ast.Compare):
+                continue
+            operands = [node.left, *node.comparators]
+            if any(_option_ref(a) for a in operands) and any(_str_constant(a) for a in operands):
+                out.append(f"{name}:{node.lineno}: {ast.get_source_segment(text, node)}")
+    return out

@@ -6,256 +6,51 @@ prints); ``/api/sweeps`` in :func:`cmpsim.sweeps.sweep` (see :mod:`cmpsim.web.jo
 ``/api/validate`` in :func:`cmpsim.validation.validate`. Bad input gets HTTP 422 with cmpsim's
 own message and the parameter it names (``{"detail": ..., "parameter": ...}``); nothing the
 server does wrong shows a traceback to the client.
+
+The application is put together here from rooms of its own: :mod:`~cmpsim.web.payloads`
+(request bodies to a Config, answers to JSON, :class:`InputError`), :mod:`~cmpsim.web.page`
+(the page's files), :mod:`~cmpsim.web.sweep_routes` (the sweep routes over
+:mod:`~cmpsim.web.jobs`) and :mod:`~cmpsim.web.guard` (the token).
 """
 
 from __future__ import annotations
 
-import asyncio
-import hmac
 import json
 import logging
-import math
-import re
 import tempfile
 from contextlib import asynccontextmanager
-from http.cookies import SimpleCookie
-from importlib import resources
 from pathlib import Path
 from typing import Any, Literal
-from urllib.parse import parse_qs, quote, unquote
 
 from fastapi import Body, FastAPI, Query, Request
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import FileResponse, JSONResponse, Response, StreamingResponse
+from fastapi.responses import JSONResponse, Response
 from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from .. import __version__
+from .guard import TOKEN_COOKIE, TokenGuard
 from .jobs import SweepJobs
 from .limits import BodySizeLimit, Busy, JobSlots, LimitError, Limits
+from .page import STATIC_FILES, page_routes
+from .payloads import (
+    InputError,
+    config_from_request,
+    error_response,
+    fields_payload,
+    named_parameter,
+    outputs_payload,
+    params_payload,
+    setting_names,
+    validation_payload,
+)
+from .sweep_routes import sweep_routes
 
-__all__ = ["create_app", "InputError", "TOKEN_COOKIE", "STATIC_FILES"]
+__all__ = ["create_app", "InputError", "TOKEN_COOKIE", "STATIC_FILES", "TokenGuard", "config_from_request"]
 
 log = logging.getLogger("cmpsim.web")
 
-#: Cookie that carries the token after the page was opened with ``?token=...``.
-TOKEN_COOKIE = "cmpsim_token"
-_SECTIONS = ("wafer", "process", "slurry", "pad", "numerics")
-#: The only files the server sends besides the API: name -> media type.
-STATIC_FILES = {
-    "index.html": "text/html; charset=utf-8",
-    "app.js": "text/javascript; charset=utf-8",
-    "app.css": "text/css; charset=utf-8",
-    "api.html": "text/html; charset=utf-8",
-    "api.js": "text/javascript; charset=utf-8",
-    "plotly.min.js": "text/javascript; charset=utf-8",  # from the installed plotly wheel
-}
-_NO_SNIFF = {"X-Content-Type-Options": "nosniff"}
-
 _SOLVE_EXAMPLE = {"applied_pressure": "3 psi", "rotation_speed": "60 rpm", "grid": "coarse"}
-_SWEEP_EXAMPLE = {
-    "base": {"grid": "coarse"},
-    "axes": {"applied_pressure": {"start": "2 psi", "stop": "6 psi", "num": 5}},
-}
-
-
-class InputError(ValueError):
-    """Bad input: HTTP 422 with the message and the parameter it concerns (or None)."""
-
-    def __init__(self, message: str, parameter: str | None = None):
-        super().__init__(message)
-        self.parameter = parameter
-
-
-def _error(status: int, detail: str, parameter: str | None = None, headers: dict | None = None) -> JSONResponse:
-    return JSONResponse({"detail": detail, "parameter": parameter}, status_code=status, headers=headers)
-
-
-def _named(message: str, candidates) -> str | None:
-    """The candidate name that the message mentions first (cmpsim's messages name the parameter)."""
-    best = None
-    for name in set(candidates):
-        m = re.search(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])", message)
-        if m and (best is None or m.start() < best[0]):
-            best = (m.start(), name)
-    return best[1] if best else None
-
-
-def _keys(data: Any) -> list[str]:
-    """Every setting name in a flat or sectioned mapping of inputs."""
-    out: list[str] = []
-    if isinstance(data, dict):
-        for k, v in data.items():
-            if k in _SECTIONS and isinstance(v, dict):
-                out += [str(kk) for kk in v]
-            out.append(str(k))
-    return out
-
-
-def _check_scalars(data: dict, where: str = "") -> None:
-    from ..config import PARAMETERS
-
-    for key, value in data.items():
-        if key in _SECTIONS and isinstance(value, dict):
-            _check_scalars(value, where)
-            continue
-        if key not in PARAMETERS:
-            continue  # cmpsim says "unknown parameter" with the known names
-        if isinstance(value, bool) or not isinstance(value, (str, int, float)):
-            kind = "null" if value is None else type(value).__name__.replace("dict", "object").replace("list", "array")
-            raise InputError(f'{where}{key}: expected a number (SI) or a string with units such as "3 psi"; got a JSON {kind}', key)
-
-
-def config_from_request(data: Any):
-    """The :class:`~cmpsim.config.Config` of a request body (flat or sectioned; units or SI numbers)."""
-    from ..config import Config
-
-    if data is None:
-        data = {}
-    if not isinstance(data, dict):
-        raise InputError('the request body must be a JSON object of inputs, e.g. {"applied_pressure": "3 psi"}')
-    _check_scalars(data)
-    try:
-        return Config.from_mapping(data)
-    except ValueError as exc:
-        raise InputError(str(exc), _named(str(exc), _keys(data))) from None
-
-
-def _json_number(v: float):
-    return v if math.isfinite(v) else None
-
-
-def _fields_payload(result, names: list[str] | None) -> dict:
-    """The wafer maps of :attr:`cmpsim.result.Result.fields` as JSON (NaN outside the wafer -> null)."""
-    import numpy as np
-
-    ds = result.fields
-    available = [k for k in ds.data_vars if ds[k].dims == ("y", "x")]
-    if names:
-        unknown = [n for n in names if n not in available]
-        if unknown:
-            raise InputError(f"fields: unknown field(s) {', '.join(unknown)}; available: {', '.join(available)}", "fields")
-    else:
-        names = available
-    maps = {}
-    for name in names:
-        z = np.asarray(ds[name].values, dtype=float)
-        rows = [[_json_number(float(f"{v:.6g}")) if math.isfinite(v) else None for v in row] for row in z.tolist()]
-        maps[name] = {"units": ds[name].attrs.get("units", ""), "long_name": ds[name].attrs.get("long_name", name), "z": rows}
-    return {
-        "x": [float(v) for v in ds["x"].values],
-        "y": [float(v) for v in ds["y"].values],
-        "units": {"x": ds["x"].attrs.get("units", "m"), "y": ds["y"].attrs.get("units", "m")},
-        "maps": maps,
-    }
-
-
-def _params_payload() -> dict:
-    from ..config import PARAMETERS, format_display, to_display
-
-    def shown(name, v):
-        if v is None:
-            return None
-        try:
-            return float(to_display(name, v))
-        except Exception:  # pragma: no cover - a unit pint cannot convert: show SI
-            return v
-
-    out = []
-    for n, p in PARAMETERS.items():
-        kind = "choice" if p.choices else ("grid" if p.unit == "grid" else "number")
-        out.append(
-            {
-                "name": n,
-                "section": p.section,
-                "symbol": p.symbol,
-                "kind": kind,
-                "unit": "" if kind != "number" else p.unit,
-                "display_unit": "" if kind != "number" else p.display,
-                "default": p.default,
-                "default_display": format_display(n, p.default),
-                "description": p.description,
-                "source": p.source,
-                "range": p.range_text(),
-                "low": p.low,
-                "high": p.high,
-                "low_open": p.low_open,
-                "high_open": p.high_open,
-                "low_display": shown(n, p.low) if kind == "number" else None,
-                "high_display": shown(n, p.high) if kind == "number" else None,
-                "choices": list(p.choices),
-            }
-        )
-    return {"cmpsim_version": __version__, "sections": list(_SECTIONS), "parameters": out}
-
-
-def _static_dir() -> Path:
-    return Path(str(resources.files("cmpsim.web") / "static"))
-
-
-def _plotly_js() -> Path | None:
-    try:
-        path = Path(str(resources.files("plotly") / "package_data" / "plotly.min.js"))
-    except ModuleNotFoundError:  # pragma: no cover - plotly is in the web extra
-        return None
-    return path if path.is_file() else None
-
-
-class TokenGuard:
-    """ASGI middleware: every request needs the token, as ``Authorization: Bearer TOKEN``, the
-    cookie :data:`TOKEN_COOKIE`, or ``?token=TOKEN`` (which also sets the cookie, so the page
-    opened from that link can call the API)."""
-
-    def __init__(self, app, token: str):
-        self.app = app
-        self.token = token.encode()
-
-    def _match(self, candidate: str | None) -> bool:
-        return candidate is not None and hmac.compare_digest(candidate.encode(), self.token)
-
-    async def __call__(self, scope, receive, send):
-        if scope["type"] != "http":
-            await self.app(scope, receive, send)
-            return
-        headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
-        auth = headers.get("authorization", "")
-        bearer = auth[7:].strip() if auth[:7].lower() == "bearer " else None
-        cookie = None
-        if "cookie" in headers:
-            try:
-                jar = SimpleCookie(headers["cookie"])
-                if TOKEN_COOKIE in jar:
-                    cookie = unquote(jar[TOKEN_COOKIE].value)
-            except Exception:  # a malformed Cookie header is no token
-                cookie = None
-        query = parse_qs(scope.get("query_string", b"").decode("latin-1")).get("token", [None])[0]
-        if self._match(bearer) or self._match(cookie):
-            await self.app(scope, receive, send)
-            return
-        if self._match(query):
-            value = f"{TOKEN_COOKIE}={quote(self.token.decode(), safe='')}; Path=/; HttpOnly; SameSite=Strict"
-
-            async def send_with_cookie(message):
-                if message["type"] == "http.response.start":
-                    message = dict(message, headers=list(message.get("headers", [])) + [(b"set-cookie", value.encode("latin-1"))])
-                await send(message)
-
-            await self.app(scope, receive, send_with_cookie)
-            return
-        body = json.dumps(
-            {
-                "detail": "this server needs its token: send 'Authorization: Bearer TOKEN', or open the page once as /?token=TOKEN",
-                "parameter": None,
-            }
-        ).encode()
-        await send(
-            {
-                "type": "http.response.start",
-                "status": 401,
-                "headers": [(b"content-type", b"application/json"), (b"www-authenticate", b"Bearer"), (b"content-length", str(len(body)).encode())],
-            }
-        )
-        await send({"type": "http.response.body", "body": body})
 
 
 def create_app(limits: Limits | None = None, token: str | None = None, workers: int | None = None, scheduler: str | None = None) -> FastAPI:
@@ -274,7 +69,6 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
     limits = limits or Limits()
     slots = JobSlots(limits.max_jobs)
     jobs = SweepJobs(workers=workers, scheduler=scheduler, max_points=limits.max_sweep_points, on_finish=lambda job: slots.give_back())
-    static = _static_dir()
 
     @asynccontextmanager
     async def lifespan(app):
@@ -304,14 +98,14 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
 
     # ------------------------------------------------------------------ errors
     async def _unprocessable(request, exc: InputError | LimitError):
-        return _error(422, str(exc), exc.parameter)
+        return error_response(422, str(exc), exc.parameter)
 
     app.add_exception_handler(InputError, _unprocessable)
     app.add_exception_handler(LimitError, _unprocessable)
 
     @app.exception_handler(Busy)
     async def _busy(request, exc: Busy):
-        return _error(429, str(exc), None, headers={"Retry-After": str(limits.retry_after_s)})
+        return error_response(429, str(exc), None, headers={"Retry-After": str(limits.retry_after_s)})
 
     @app.exception_handler(RequestValidationError)
     async def _validation(request, exc: RequestValidationError):
@@ -322,42 +116,22 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
         if loc[:1] == ["body"]:
             if kind == "json_invalid":
                 ctx = first.get("ctx", {}).get("error", "")
-                return _error(422, f"the request body is not valid JSON{': ' + str(ctx) if ctx else ''}")
-            return _error(422, 'the request body must be a JSON object, e.g. {"applied_pressure": "3 psi"}' + ("" if len(loc) == 1 else f" ({'.'.join(loc[1:])}: {first.get('msg', '')})"))
+                return error_response(422, f"the request body is not valid JSON{': ' + str(ctx) if ctx else ''}")
+            return error_response(422, 'the request body must be a JSON object, e.g. {"applied_pressure": "3 psi"}' + ("" if len(loc) == 1 else f" ({'.'.join(loc[1:])}: {first.get('msg', '')})"))
         name = loc[-1] if loc else None
-        return _error(422, f"{name}: {first.get('msg', 'invalid value')}" if name else "invalid request", name)
+        return error_response(422, f"{name}: {first.get('msg', 'invalid value')}" if name else "invalid request", name)
 
     @app.exception_handler(StarletteHTTPException)
     async def _http(request, exc: StarletteHTTPException):
-        return _error(exc.status_code, str(exc.detail), None, headers=getattr(exc, "headers", None))
+        return error_response(exc.status_code, str(exc.detail), None, headers=getattr(exc, "headers", None))
 
     @app.exception_handler(Exception)
     async def _internal(request, exc: Exception):
         # the traceback goes to the server's log (uvicorn logs the re-raised exception), never to the client
         log.error("internal error on %s %s: %s", request.method, request.url.path, type(exc).__name__)
-        return _error(500, "internal server error; it was logged on the server (please report what you sent)")
+        return error_response(500, "internal server error; it was logged on the server (please report what you sent)")
 
-    # ------------------------------------------------------------------ page
-    def _file(name: str):
-        if name not in STATIC_FILES:
-            return _error(404, "Not Found")
-        path = _plotly_js() if name == "plotly.min.js" else static / name
-        if path is None or not path.is_file():
-            return _error(404, "Not Found")
-        cache = "public, max-age=86400" if name == "plotly.min.js" else "no-cache"
-        return FileResponse(path, media_type=STATIC_FILES[name], headers={**_NO_SNIFF, "Cache-Control": cache})
-
-    @app.get("/", include_in_schema=False)
-    def index():
-        return _file("index.html")
-
-    @app.get("/api/docs", include_in_schema=False)
-    def api_docs():
-        return _file("api.html")
-
-    @app.get("/static/{name}", include_in_schema=False)
-    def static_file(name: str):
-        return _file(name)
+    app.include_router(page_routes())
 
     # ------------------------------------------------------------------ API: inputs
     @app.get("/api/info", summary="Version, limits and jobs running")
@@ -372,16 +146,11 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
 
     @app.get("/api/params", summary="Every input: name, section, default, display unit, valid range, source, choices")
     def params():
-        return _params_payload()
+        return params_payload()
 
     @app.get("/api/outputs", summary="Every scalar output: name, kind, SI unit, display unit and factor, description")
     def outputs_list():
-        from .. import outputs
-
-        return [
-            {"name": o.name, "kind": o.kind, "unit": o.unit, "display_unit": o.display_unit, "display_factor": o.display_factor, "long_name": o.long_name}
-            for o in (outputs.scalar(n) for n in outputs.scalar_names())
-        ]
+        return outputs_payload()
 
     # ------------------------------------------------------------------ API: one operating point
     @app.post(
@@ -414,7 +183,7 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
             except EquilibriumError as exc:
                 raise InputError(f"no equilibrium: {exc}") from None
             except ValueError as exc:
-                raise InputError(str(exc), _named(str(exc), _keys(payload))) from None
+                raise InputError(str(exc), named_parameter(str(exc), setting_names(payload))) from None
             if format == "netcdf":
                 with tempfile.TemporaryDirectory(prefix="cmpsim-serve-") as tmp:
                     data = result.to_netcdf(Path(tmp) / "result.nc").read_bytes()
@@ -423,131 +192,11 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
             if include != "fields":
                 return Response(text, media_type="application/json")
             obj = json.loads(text)
-            obj["fields"] = _fields_payload(result, names)
+            obj["fields"] = fields_payload(result, names)
             return JSONResponse(obj)
 
     # ------------------------------------------------------------------ API: sweeps
-    def _check_sweep_size(payload: dict) -> None:
-        axes = payload.get("axes")
-        if not isinstance(axes, dict):
-            return
-        for name, spec in axes.items():
-            n = len(spec) if isinstance(spec, list) else (spec.get("num") if isinstance(spec, dict) else None)
-            if isinstance(n, int) and not isinstance(n, bool) and n > limits.max_sweep_points:
-                raise LimitError(
-                    f"sweep [axes] {name}: {n} values, more than this server's largest sweep of "
-                    f"{limits.max_sweep_points} points (--max-sweep-points)",
-                    parameter=str(name),
-                )
-
-    @app.post(
-        "/api/sweeps",
-        status_code=202,
-        summary="Start a sweep in the background",
-        description=(
-            "The body is the content of a sweep file as JSON: `base` (inputs), `axes` (name: list of values or "
-            "{start, stop, num[, scale]}), `points` (explicit points). Answers at once with the sweep's `id` "
-            "and layout; the sweep runs on the server's Dask cluster, as `cmpsim sweep` does."
-        ),
-    )
-    def start_sweep(payload: dict[str, Any] = Body(..., openapi_examples={"pressure": {"value": _SWEEP_EXAMPLE}})):
-        from ..sweeps import SweepSpec
-
-        axes, points = payload.get("axes"), payload.get("points")
-        names = [str(n) for n in axes] if isinstance(axes, dict) else []
-        names += _keys(payload.get("base"))
-        for p in points if isinstance(points, list) else []:
-            names += _keys(p)
-        _check_sweep_size(payload)
-        if isinstance(payload.get("base"), dict):
-            _check_scalars(payload["base"], "sweep [base] ")
-        try:
-            spec = SweepSpec.from_mapping(payload, where="sweep")
-            spec.check_size(limits.max_sweep_points)
-        except LimitError:
-            raise
-        except ValueError as exc:
-            raise InputError(str(exc), _named(str(exc), names)) from None
-        for grid in {spec.base.numerics.grid, *spec.coords.get("grid", ())}:
-            try:
-                limits.check_grid(grid)
-            except LimitError:
-                raise
-            except ValueError:
-                pass  # a malformed grid value: that point will be recorded as invalid
-        slots.take()
-        try:
-            job = jobs.start(spec)
-        except BaseException:
-            slots.give_back()
-            raise
-        return {"id": job.id, "status": job.status, "total": job.total, "warnings": spec.invalid_values(), **job.layout()}
-
-    def _job(job_id: str):
-        job = jobs.get(job_id)
-        if job is None:
-            raise StarletteHTTPException(404, f"no sweep with id {job_id!r} on this server")
-        return job
-
-    @app.get("/api/sweeps", summary="The sweeps this server knows (without their points)")
-    def list_sweeps():
-        return [j.state(with_points=False) for j in list(jobs.jobs.values())]
-
-    @app.get("/api/sweeps/{job_id}", summary="Status, done/total and the finished points of a sweep")
-    def sweep_state(job_id: str):
-        return _job(job_id).state()
-
-    @app.get(
-        "/api/sweeps/{job_id}/events",
-        summary="Server-sent events: one `point` event per finished point, then `end`",
-        response_class=StreamingResponse,
-    )
-    async def sweep_events(job_id: str, request: Request):
-        job = _job(job_id)
-        try:
-            sent = max(0, int(request.headers.get("last-event-id", "0")))
-        except ValueError:
-            sent = 0
-
-        async def stream():
-            nonlocal sent
-            yield "retry: 1000\n\n"
-            while True:
-                finished = job.finished_running
-                while sent < job.done:
-                    point = job.points[sent]
-                    sent += 1
-                    data = json.dumps({**point, "done": sent, "total": job.total}, allow_nan=False)
-                    yield f"id: {sent}\nevent: point\ndata: {data}\n\n"
-                if finished:
-                    yield f"event: end\ndata: {json.dumps(job.state(with_points=False), allow_nan=False)}\n\n"
-                    return
-                if await request.is_disconnected():
-                    return
-                await asyncio.sleep(0.1)
-
-        return StreamingResponse(stream(), media_type="text/event-stream", headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"})
-
-    @app.get("/api/sweeps/{job_id}/result", summary="The sweep's NetCDF file (once done)", response_class=FileResponse)
-    def sweep_result(job_id: str):
-        job = _job(job_id)
-        if job.status != "done" or not job.out.is_file():
-            raise StarletteHTTPException(409, f"the sweep is {job.status} ({job.done} of {job.total} points); its file is there once it is done")
-        return FileResponse(job.out, media_type="application/x-netcdf", filename=f"cmpsim-sweep-{job.id}.nc")
-
-    @app.get("/api/sweeps/{job_id}/file", summary="The sweep file (TOML) of a sweep, for `cmpsim sweep`")
-    def sweep_file(job_id: str):
-        job = _job(job_id)
-        return Response(job.spec.to_toml(), media_type="application/toml", headers={"Content-Disposition": f'attachment; filename="cmpsim-sweep-{job.id}.toml"'})
-
-    @app.delete("/api/sweeps/{job_id}", summary="Cancel a running sweep; forget a finished one")
-    def delete_sweep(job_id: str):
-        job = _job(job_id)
-        if job.finished_running:
-            jobs.remove(job_id)
-            return {"id": job_id, "status": "deleted"}
-        jobs.cancel(job_id)
-        return {"id": job_id, "status": "cancelling"}
+    app.include_router(sweep_routes(limits, slots, jobs))
 
     # ------------------------------------------------------------------ API: validation
     @app.post(
@@ -599,16 +248,6 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
             raise LimitError(f"the CSV has {n} data points, more than this server solves in one request ({limits.max_sweep_points}; --max-sweep-points)")
         with slots:
             report = validate(datasets, config=cfg)
-
-        def clean(v):
-            return _json_number(v) if isinstance(v, float) else v
-
-        return {
-            "points": {"header": list(report.POINT_HEADER), "rows": report.point_rows()},
-            "datasets": {"header": list(report.DATASET_HEADER), "rows": report.dataset_rows()},
-            "records": [{k: clean(v) for k, v in p.as_row().items()} for p in report.points],
-            "equilibria": report.equilibria,
-            "elapsed_s": report.elapsed_s,
-        }
+        return validation_payload(report)
 
     return app

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import logging
-import math
 import shutil
 import tempfile
 import threading
@@ -25,6 +24,8 @@ import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable
+
+from .payloads import finite
 
 __all__ = ["SweepJob", "SweepJobs", "STATES"]
 
@@ -37,26 +38,20 @@ _POLL_S = 0.1
 _KEEP_FINISHED = 50
 
 
-def _finite(v):
-    if isinstance(v, float) and not math.isfinite(v):
-        return None
-    return v
-
-
 def _plain(v):
     """numpy scalars -> Python (NaN -> None), for JSON."""
     if hasattr(v, "item"):
         v = v.item()
     if isinstance(v, bytes):
         v = v.decode()
-    return _finite(v)
+    return finite(v)
 
 
 def point_values(scalars: dict) -> dict:
     """The SI values of a point record: the ``values`` of a schema-2 object, else the flat object."""
     if isinstance(scalars, dict) and isinstance(scalars.get("values"), dict):
-        return {k: _finite(v) for k, v in scalars["values"].items()}
-    return {k: _finite(v) for k, v in (scalars or {}).items() if not isinstance(v, (dict, list))}
+        return {k: finite(v) for k, v in scalars["values"].items()}
+    return {k: finite(v) for k, v in (scalars or {}).items() if not isinstance(v, (dict, list))}
 
 
 @dataclass

@@ -29,16 +29,17 @@ def serve(
     workers: int | None = None,
     scheduler: str | None = None,
     echo: Callable[[str], None] = print,
-    warn: Callable[[str], None] = print,
+    warn: Callable[[str], None] = lambda message: print(f"warning: {message}"),
 ) -> None:
-    """Serve until interrupted; says in one line where to point the browser."""
+    """Serve until interrupted; says in one line where to point the browser (``echo``), and
+    gives ``warn`` the text of a warning (the command line prints it as ``cmpsim: warning: ...``)."""
     import uvicorn
 
     from .app import create_app
 
     if host not in LOOPBACK:
         warn(
-            f"warning: --host {host} makes the server reachable from other machines"
+            f"--host {host} makes the server reachable from other machines"
             + (
                 "; every request needs the token"
                 if token

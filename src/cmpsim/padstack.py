@@ -1,0 +1,252 @@
+"""The elastic pad stack under the asperity layer: layers, a Winkler bed, and layers with lateral coupling.
+
+Pure kernels of the pad's bulk deformation (``docs/model.md``, "Pad compliance"): the
+constrained modulus of a layer, the stiffness of layers in series (a Winkler bed, w = p / k),
+the Fourier stiffness of an elastic layer on a rigid base, and the plate-on-layer compliance
+C(q) of a top pad on a softer subpad, applied to a polar pressure field by FFT on a Cartesian
+auxiliary grid. The coupled solve of the film with this deflection is in
+:mod:`cmpsim.compliance`; the pad models that pick one of these stacks by name are in
+:mod:`cmpsim.models.pads`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+__all__ = [
+    "PadLayer",
+    "constrained_modulus",
+    "foundation_stiffness",
+    "WinklerFoundation",
+    "LayeredFoundation",
+    "layer_stiffness",
+    "plate_bending_stiffness",
+]
+
+def constrained_modulus(youngs_modulus, poisson):
+    """Constrained (oedometric, P-wave) modulus M = E (1 - nu) / ((1 + nu)(1 - 2 nu)), Pa.
+
+    The stress over the strain of a layer compressed without lateral expansion, which is the
+    state of a thin layer under a load much wider than its thickness.
+    """
+    e = np.asarray(youngs_modulus, dtype=float)
+    nu = np.asarray(poisson, dtype=float)
+    return e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu))
+
+
+@dataclass(frozen=True)
+class PadLayer:
+    """One layer of the pad stack: thickness (m), Young's modulus (Pa), Poisson ratio."""
+
+    thickness: float
+    modulus: float
+    poisson: float
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.thickness) and self.thickness >= 0):
+            raise ValueError(f"layer thickness must be finite and >= 0 m; got {self.thickness!r}")
+        if not (np.isfinite(self.modulus) and self.modulus > 0):
+            raise ValueError(f"layer modulus must be finite and > 0 Pa; got {self.modulus!r}")
+        if not (0.0 <= self.poisson < 0.5):
+            raise ValueError(f"layer Poisson ratio must be in [0, 0.5); got {self.poisson!r}")
+
+    @property
+    def compliance(self) -> float:
+        """Deflection per unit pressure t / M of the layer, m/Pa."""
+        return self.thickness / float(constrained_modulus(self.modulus, self.poisson))
+
+
+def foundation_stiffness(layers) -> float:
+    """Stiffness k = 1 / sum(t_i / M_i) of layers in series, Pa/m (inf for no thickness)."""
+    c = sum(layer.compliance for layer in layers)
+    return np.inf if c == 0 else 1.0 / c
+
+
+@dataclass(frozen=True)
+class WinklerFoundation:
+    """Local elastic foundation of stiffness k (Pa/m): deflection w = p / k."""
+
+    stiffness: float
+
+    def __post_init__(self) -> None:
+        if not (self.stiffness > 0):
+            raise ValueError(f"foundation stiffness must be > 0 Pa/m; got {self.stiffness!r}")
+
+    @classmethod
+    def from_layers(cls, layers) -> "WinklerFoundation":
+        """The foundation of a stack of :class:`PadLayer` in series."""
+        return cls(foundation_stiffness(layers))
+
+    #: The deflection at a point depends on the pressure there only.
+    local = True
+
+    def deflection(self, pressure):
+        """Deflection (m) under a pressure (Pa)."""
+        return np.asarray(pressure, dtype=float) / self.stiffness
+
+
+def layer_stiffness(q, thickness: float, modulus: float, poisson: float):
+    """Fourier stiffness p~/w~ (Pa/m) of an elastic layer bonded to a rigid base, frictionless top.
+
+    K(q) = (E* q / 2) [(3 - 4 nu) cosh 2qt + 2 (qt)^2 + 5 - 12 nu + 8 nu^2] / [(3 - 4 nu) sinh 2qt - 2qt]
+    with E* = E / (1 - nu^2), for the surface wave number q (rad/m) of a normal load. It tends to
+    the constrained stiffness M/t as q -> 0 (a Winkler bed) and to the half space E* q / 2 as
+    qt -> inf. The same expression is the finite-thickness correction of ContactMechanics'
+    ``PeriodicFFTElasticHalfSpace`` (Pastewka et al., MIT licence; after Johnson, Greenwood &
+    Higginson, Int. J. Mech. Sci. 27, 383, 1985, for the half space).
+    """
+    q = np.asarray(q, dtype=float)
+    nu, t = poisson, thickness
+    e_star = modulus / (1.0 - nu * nu)
+    out = np.empty_like(q)
+    qt = q * t
+    small = qt < 1e-4
+    out[small] = float(constrained_modulus(modulus, nu)) / t
+    big = qt > 40.0  # the ratio is 1 to round-off
+    out[big] = 0.5 * e_star * q[big]
+    mid = ~(small | big)
+    x = 2.0 * qt[mid]
+    a = 3.0 - 4.0 * nu
+    num = a * np.cosh(x) + 0.5 * x * x + 5.0 - 12.0 * nu + 8.0 * nu * nu
+    den = a * np.sinh(x) - x
+    out[mid] = 0.5 * e_star * q[mid] * num / den
+    return out
+
+
+def plate_bending_stiffness(thickness: float, modulus: float, poisson: float) -> float:
+    """Bending stiffness D = E t^3 / (12 (1 - nu^2)) of a thin plate, N m."""
+    return modulus * thickness**3 / (12.0 * (1.0 - poisson * poisson))
+
+
+@dataclass(frozen=True)
+class LayeredFoundation:
+    """Pad stack with lateral coupling: elastic layers bonded to the platen (``pad_compliance="layer"``).
+
+    One layer: an elastic layer of finite thickness, Fourier stiffness :func:`layer_stiffness`.
+    Two layers (top pad on a softer subpad): the top pad is a thin plate that bends over the
+    subpad, an elastic layer, and compresses locally through its thickness:
+
+        C(q) = t_1 / M_1 + 1 / (D_1 q^4 + K_2(q))        (deflection per pressure, m/Pa).
+
+    C(0) = 1/k of the same layers in series, so a load much wider than the stack deflects it
+    like the Winkler bed of :class:`WinklerFoundation`. The pad outside the wafer carries no
+    load. The deflection of a pressure field on the polar grid is computed on a Cartesian
+    auxiliary grid by FFT (:meth:`operator`).
+    """
+
+    layers: tuple
+
+    local = False
+
+    def __post_init__(self) -> None:
+        if not 1 <= len(self.layers) <= 2 or any(layer.thickness <= 0 for layer in self.layers):
+            raise ValueError("a layered pad has one or two layers of positive thickness (top pad first)")
+
+    @property
+    def stiffness(self) -> float:
+        """Long-wavelength stiffness k = 1 / sum t_i / M_i, Pa/m."""
+        return foundation_stiffness(self.layers)
+
+    @property
+    def local_compliance(self) -> float:
+        """Local (through-thickness) compliance of the top pad when it acts as a plate, m/Pa."""
+        return self.layers[0].compliance if len(self.layers) == 2 else 0.0
+
+    def nonlocal_compliance(self, q):
+        """The part of C(q) that couples neighbouring points, m/Pa."""
+        q = np.asarray(q, dtype=float)
+        if len(self.layers) == 1:
+            top = self.layers[0]
+            return 1.0 / layer_stiffness(q, top.thickness, top.modulus, top.poisson)
+        top, sub = self.layers
+        d = plate_bending_stiffness(top.thickness, top.modulus, top.poisson)
+        return 1.0 / (d * q**4 + layer_stiffness(q, sub.thickness, sub.modulus, sub.poisson))
+
+    def compliance(self, q):
+        """C(q) = w~/p~, m/Pa."""
+        return self.local_compliance + self.nonlocal_compliance(q)
+
+    @property
+    def coupling_length(self) -> float:
+        """How far a load spreads: the stack thickness, or the plate length (D_1/k_2)^(1/4), m."""
+        total = sum(layer.thickness for layer in self.layers)
+        if len(self.layers) == 1:
+            return total
+        top, sub = self.layers
+        d = plate_bending_stiffness(top.thickness, top.modulus, top.poisson)
+        return max(total, (d * sub.compliance) ** 0.25)
+
+    def deflection(self, pressure, grid):
+        """Deflection (m) at the cell centres of ``grid`` under a cell pressure field (Pa)."""
+        p = np.asarray(pressure, dtype=float)
+        return (self.local_compliance * p.ravel() + self.operator(grid).apply(p)).reshape(p.shape)
+
+    def operator(self, grid) -> "_LayerOperator":
+        """The FFT deflection operator of the nonlocal part on ``grid`` (built once, cached)."""
+        key = (self, grid)
+        op = _LAYER_OPERATORS.get(key)
+        if op is None:
+            if len(_LAYER_OPERATORS) > 8:
+                _LAYER_OPERATORS.clear()
+            op = _LAYER_OPERATORS[key] = _LayerOperator(self, grid)
+        return op
+
+
+_LAYER_OPERATORS: dict = {}
+
+
+class _LayerOperator:
+    """Deflection of the nonlocal compliance on a periodic Cartesian grid, seen from the polar grid.
+
+    The square auxiliary grid (spacing dr/2) covers the wafer and a margin of six coupling
+    lengths (at least 4 dr) around it, so that the periodic images of the wafer interact only
+    through tails that have decayed by about e^-12. The pressure of a polar cell field is
+    interpolated to the Cartesian cell centres (PolarGrid.interpolate) and weighted by the
+    share of each Cartesian cell inside the wafer (16 sub-points per cell); the deflection
+    w = IFFT(C(q) FFT(p)) is interpolated back to the polar cell centres (bilinear).
+    """
+
+    def __init__(self, foundation: LayeredFoundation, grid):
+        from scipy.fft import next_fast_len
+
+        R = grid.radius
+        h = 0.5 * grid.dr
+        margin = max(6.0 * foundation.coupling_length, 4.0 * grid.dr)
+        n = next_fast_len(int(np.ceil(2.0 * (R + margin) / h)), real=True)
+        self.n, self.h = n, h
+        c = -0.5 * n * h + (np.arange(n) + 0.5) * h
+        X, Y = np.meshgrid(c, c, indexing="ij")
+        # share of each Cartesian cell inside the wafer, from 4 x 4 sub-points
+        sub = (np.arange(4) + 0.5) / 4.0 - 0.5
+        frac = np.zeros(X.shape)
+        for sx in sub:
+            for sy in sub:
+                frac += (X + sx * h) ** 2 + (Y + sy * h) ** 2 <= R * R
+        frac /= 16.0
+        inside = np.flatnonzero(frac.ravel() > 0)
+        self.inside = inside
+        self.remap = (sp.diags(frac.ravel()[inside]) @ grid.interpolation_matrix(X.ravel()[inside], Y.ravel()[inside])).tocsr()
+        # bilinear from the Cartesian cell centres to the polar cell centres
+        xc, yc = grid.centres
+        fx = (xc.ravel() - c[0]) / h
+        fy = (yc.ravel() - c[0]) / h
+        i0, j0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
+        tx, ty = fx - i0, fy - j0
+        rows = np.repeat(np.arange(grid.size), 4)
+        cols = np.stack([i0 * n + j0, (i0 + 1) * n + j0, i0 * n + j0 + 1, (i0 + 1) * n + j0 + 1], axis=1).ravel()
+        vals = np.stack([(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty], axis=1).ravel()
+        self.sample = sp.csr_matrix((vals, (rows, cols)), shape=(grid.size, n * n))
+        kx = 2.0 * np.pi * np.fft.fftfreq(n, h)
+        ky = 2.0 * np.pi * np.fft.rfftfreq(n, h)
+        q = np.hypot(kx[:, None], ky[None, :])
+        self.kernel = foundation.nonlocal_compliance(q)
+
+    def apply(self, pressure) -> np.ndarray:
+        """Nonlocal deflection (m, flat, cell order) of a polar cell pressure field (Pa)."""
+        p = np.zeros(self.n * self.n)
+        p[self.inside] = self.remap @ np.asarray(pressure, dtype=float).ravel()
+        w = np.fft.irfft2(self.kernel * np.fft.rfft2(p.reshape(self.n, self.n)), s=(self.n, self.n))
+        return self.sample @ w.ravel()
