@@ -50,6 +50,12 @@ class PadModel(Protocol):
     def contact_only_start(self, problem) -> np.ndarray:
         """The cold start: u at zero tilt where the pad contact alone carries the load."""
 
+    def resume_chain(self, problem) -> None:
+        """A warm start continues a chain of points: start from what the last equilibrium left."""
+
+    def end_chain(self, problem) -> None:
+        """Keep what this equilibrium leaves for the next point of a chain."""
+
 
 @runtime_checkable
 class CavitationModel(Protocol):
