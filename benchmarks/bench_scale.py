@@ -1,6 +1,8 @@
 """The default model at 300 mm and on the edge-graded grids against b10a4ba (issue 23), in one run.
 
-Run: python benchmarks/bench_scale.py [--repeat 5] [--rounds 3] [--json FILE]
+Run: python benchmarks/bench_scale.py [--repeat 5] [--rounds 3] [--json FILE] (about 15 min on
+a shared 2-core VM, most of it b10a4ba's 300 mm fine grid); ``--report FILE`` prints the report
+of a ``--json`` file again.
 
 The baseline (commit b10a4ba, before issue 23) is extracted from this repository's history
 (``git archive b10a4ba src/cmpsim``) into a temporary directory and put first on the
@@ -24,8 +26,9 @@ cache of reference solves was emptied, i.e. a first solve including any referenc
 
 It prints the times, the ratios b10a4ba / now, the growth exponent p of cost ~ N^p from the
 default preset to the fine one (four times the cells) at 300 mm, the largest relative
-difference of the scalars on the shared 3-inch grid, and how much the graded default grid
-moves the 3-inch answers against the equal-ring 24x64 one.
+difference of the scalars on the shared 3-inch grid, how much the graded default grid moves the
+3-inch answers against the equal-ring 24x64 one (that grid's truncation error), and the LU
+factorisations of each case.
 """
 
 from __future__ import annotations
@@ -132,14 +135,19 @@ def main(argv=None) -> int:
     ap.add_argument("--rounds", type=int, default=3, help="alternating rounds of the two versions")
     ap.add_argument("--rtol", type=float, default=1e-6, help="agreement required on the shared 3-inch grid")
     ap.add_argument("--json", type=Path, help="also write the measurements here")
+    ap.add_argument("--report", type=Path, help="print the report of measurements written before by --json (no run)")
     args = ap.parse_args(argv)
-    with tempfile.TemporaryDirectory(prefix="cmpsim-bench-scale-") as tmp:
-        base_path = str(extract_baseline(Path(tmp)))
-        new = old = None
-        for k in range(args.rounds):
-            print(f"round {k + 1}/{args.rounds} ...", flush=True)
-            old = keep_best(old, measure(base_path, args.repeat, CASES))
-            new = keep_best(new, measure(None, args.repeat, CASES))
+    if args.report:
+        data = json.loads(args.report.read_text())
+        old, new = data["b10a4ba"], data["now"]
+    else:
+        with tempfile.TemporaryDirectory(prefix="cmpsim-bench-scale-") as tmp:
+            base_path = str(extract_baseline(Path(tmp)))
+            new = old = None
+            for k in range(args.rounds):
+                print(f"round {k + 1}/{args.rounds} ...", flush=True)
+                old = keep_best(old, measure(base_path, args.repeat, CASES))
+                new = keep_best(new, measure(None, args.repeat, CASES))
     print(f"\n{'case':24s} {'grid now':>9s} {'b10a4ba':>9s} {'now':>9s} {'ratio':>7s}   first solve (incl. reference) b10a4ba / now")
     for name in CASES:
         o, n = old[name], new[name]
@@ -151,14 +159,16 @@ def main(argv=None) -> int:
     ratio3 = new["default 3in 24x64"]["warm_s"] / new["paper 3in 24x64"]["warm_s"]
     ratio3_old = old["default 3in 24x64"]["warm_s"] / old["paper 3in 24x64"]["warm_s"]
     diff, which = max_rel_diff(old["default 3in 24x64"]["scalars"], new["default 3in 24x64"]["scalars"])
-    moved, moved_which = max_rel_diff(new["default 3in 24x64"]["scalars"], new["default 3in preset"]["scalars"])
+    uniform, graded = new["default 3in 24x64"]["scalars"], new["default 3in preset"]["scalars"]
+    moved = ", ".join(f"{k} {100 * (graded[k] - v) / abs(v):+.2f} %" for k, v in uniform.items())
     wiwnu = {k: new[k]["scalars"]["within_wafer_nonuniformity"] for k in ("default 300mm preset", "default 300mm fine", "default 300mm 48x128")}
     print(f"\ngrowth 300 mm default -> fine (x{new['default 300mm fine']['cells'] / new['default 300mm preset']['cells']:.1f} cells): cost ~ N^{p:.2f}")
     print(f"default / paper preset at 3 in on 24x64: {ratio3:.2f}x now, {ratio3_old:.2f}x in b10a4ba")
     ok = diff <= args.rtol
     print(f"3 in default on 24x64, now against b10a4ba: largest relative difference {diff:.1e} ({which}) {'OK' if ok else 'FAIL'} (tolerance {args.rtol:g})")
-    print(f"3 in default, graded default grid against equal-ring 24x64: largest relative difference {moved:.2e} ({moved_which})")
+    print(f"3 in default, graded default grid (31x64) against equal-ring 24x64: {moved}")
     print("300 mm WIWNU: " + ", ".join(f"{k.split()[-1]} {100 * v:.3f} %" for k, v in wiwnu.items()))
+    print("LU factorisations b10a4ba / now: " + ", ".join(f"{k} {old[k]['factorizations']}/{new[k]['factorizations']}" for k in CASES))
     if args.json:
         args.json.write_text(json.dumps({"b10a4ba": old, "now": new}, indent=1))
     return 0 if ok else 1
