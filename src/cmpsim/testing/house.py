@@ -148,7 +148,7 @@ def import_cycles(root: Path, top_level_only: bool = True) -> list[list[str]]:
 MODEL_OPTIONS = ("pad_compliance", "slurry_model", "cavitation", "removal_law", "carrier", "removal_kinetics", "abrasive", "film")
 #: The modules allowed to read an option's name: where the inputs are checked and where the
 #: models are picked by name (the registry).
-OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models", "cmpsim.models.registry")
+OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models")
 
 
 def _option_ref(node: ast.AST) -> bool:
