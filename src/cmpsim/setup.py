@@ -90,9 +90,9 @@ def physical_setup(config: Config) -> PhysicalSetup:
         kinematics=kin,
         flow_factor_floor=c.flow_factor_floor,
         slurry_model=c.slurry_model,
-        viscosity=c.slurry_viscosity,
+        viscosity=c.newtonian_viscosity,
     )
-    p0 = float(granular_pressure(c.granular_density, c.diameter_gap_ratio, v, t=HAFF_T))
+    p0 = float(granular_pressure(c.grain_bulk_density, c.diameter_gap_ratio, v, t=HAFF_T))
     grid = c.polar_grid()
     pad_model = models.pad_model(config)
     return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_model.foundation, pad_model, models.removal_law(config))

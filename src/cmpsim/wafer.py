@@ -103,8 +103,6 @@ class WaferProblem:
             slurry = models.slurry_model(lubrication.slurry_model, cavitation, cavitation_pressure, ambient_pressure)
         if not (np.isfinite(applied_pressure) and applied_pressure > 0):
             raise ValueError(f"applied_pressure must be > 0 Pa; got {applied_pressure!r}")
-        if not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
-            raise ValueError(f"ambient granular pressure must be > 0 Pa; got {ambient_pressure!r}")
         if variant != "hydrodynamic" and pad is None:
             raise ValueError(f"model {variant!r} needs a PadSurface")
         # the inputs as attributes (the same shape as any constructor's, e.g. calibration's _Problem)
