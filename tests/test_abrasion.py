@@ -235,11 +235,13 @@ def test_the_two_step_constants_can_be_calibrated(tmp_path):
 
 def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_computes():
     """docs/model.md 13e.6, CHANGELOG: base case 117.53 nm/min with the abrasive law (88.41 with the
-    shear-power law, the default before issue 24); 187.31 nm/min at Lai's conditions for copper and alumina."""
-    base = cmpsim.solve(relative=False)
-    old = cmpsim.solve(relative=False, removal_law="shear_power")
+    shear-power law, the default before issue 24); 187.31 nm/min at Lai's conditions for copper and alumina.
+    On the equal-ring 24x64 grid, where the docs quote them (the edge-graded default grid of issue 23
+    gives 118.10, 88.85 and 188.37)."""
+    base = cmpsim.solve(relative=False, grid="24x64")
+    old = cmpsim.solve(relative=False, removal_law="shear_power", grid="24x64")
     lai = cmpsim.solve(relative=False, film="copper", abrasive="alumina", applied_pressure="48 kPa", rotation_speed="75 rpm",
-                       centre_distance="89.13 mm", wafer_diameter="100 mm", particle_diameter="300 nm")
+                       centre_distance="89.13 mm", wafer_diameter="100 mm", particle_diameter="300 nm", grid="24x64")
     assert round(base.removal_rate_mean * 6e10, 2) == 117.53
     assert round(old.removal_rate_mean * 6e10, 2) == 88.41
     assert round(lai.removal_rate_mean * 6e10, 2) == 187.31

@@ -117,9 +117,9 @@ def reduce_outputs(polar: dict, grid, load: float, edge_exclusion: float, explic
         elif o.reduction == "load_share":
             computed[name] = grid.integrate(polar[o.of[0]]) / load
         elif o.reduction == "profile_std_over_mean":
-            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion)[0]
+            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion, grid.ring_faces)[0]
         elif o.reduction == "profile_range":
-            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion)[1]
+            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion, grid.ring_faces)[1]
     for name in outputs.scalar_names():
         o = outputs.scalar(name)
         if o.reduction == "sum":

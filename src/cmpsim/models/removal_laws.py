@@ -39,6 +39,8 @@ class PaperRemovalLaw:
 
     name = "paper"
     needs = ("normal_stress", "shear_stress")
+    #: The paper's Figs. 11-12 are in removal rate relative to its reference case.
+    relative_by_default = True
 
     def __init__(self, preston_coefficient: float):
         self.preston_coefficient = preston_coefficient
@@ -57,6 +59,8 @@ class ShearPowerRemovalLaw:
 
     name = "shear_power"
     needs = ("contact_pressure", "fluid_shear_stress", "relative_speed")
+    #: Absolute rates (m/s); the ratio, whose reference solve costs as much as the point, on request.
+    relative_by_default = False
 
     def __init__(self, coefficient: float, friction_coefficient: float, fluid_shear_weight: float):
         self.coefficient = coefficient
@@ -130,6 +134,8 @@ class AbrasiveRemovalLaw:
 
     name = "abrasive"
     needs = ("contact_pressure", "contact_area_ratio", "relative_speed")
+    #: Absolute rates (m/s); the ratio, whose reference solve costs as much as the point, on request.
+    relative_by_default = False
 
     def __init__(self, contact: AbrasiveContact, kinetics: TwoStepKinetics | None = None):
         self.contact = contact
