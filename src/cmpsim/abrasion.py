@@ -18,6 +18,11 @@ Dornfeld (IEEE Trans. Semicond. Manuf. 14, 112 (2001); 16, 469 (2003)), Zhao & C
    touches the wafer between them and each is embedded by its diameter (g = 0); otherwise the
    pad rests on the largest particles at the gap g > 0 where sum n F(x - g) = p_r (the size
    distribution then decides which particles work: Luo & Dornfeld 2003).
+2b. **Summit by summit** (:func:`summit_sharing`, when the summits in contact per area N are
+   given): a summit contact of mean area A_1 = (A_r/A_n)/N holds a Poisson number k of
+   particles (mean M = A_1 sum n); it touches the wafer around them while k <= k* = F_s / F_w
+   (F_s = p_r A_1 its load, F_w = p_pad <pi x^2/4> the most the pad presses a particle with) and
+   rests on them, sharing F_s, beyond. The continuum rule of step 2 is its limit A_1 -> infinity.
 3. **Indentation into the film.** A sphere of radius x/2 pressed on the film with force F sinks
    by the interference omega of the elastic (Hertz) / elastoplastic (Zhao–Maietta–Chang) /
    plastic law of the pad summits (``cmpsim.contact``), with the particle-film effective modulus
