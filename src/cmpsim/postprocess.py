@@ -13,6 +13,7 @@ import numpy as np
 from . import outputs, uniformity
 from .config import Config
 from .models import removal_law as _removal_law
+from .contact import contact_spot_density
 from .removal import contact_shear_stress
 from .setup import PhysicalSetup
 from .state import EquilibriumSolution
@@ -55,6 +56,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "relative_speed": lambda: np.hypot(dux, duy),
         "contact_area_ratio": lambda: ar,
         "film_thickness": lambda: st.h,
+        "contact_spot_density": lambda: contact_spot_density(st.h - problem.separation_offset, problem.pad),
     }
     rr = law.rate(**{name: fields[name]() for name in law.needs})
     # film thickness: centre, and minimum over the cell centres and the rim
