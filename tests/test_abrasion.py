@@ -19,8 +19,9 @@ from cmpsim.abrasion import (
     pad_gap,
     size_nodes,
     sphere_load,
+    summit_sharing,
 )
-from cmpsim.contact import PadSurface, asperity_laws
+from cmpsim.contact import PadSurface, asperity_contact, asperity_laws, contact_spot_density
 from cmpsim.kinetics import chemical_rate, flash_temperature, series_rate
 from cmpsim.models.removal_laws import abrasive_contact
 
@@ -68,6 +69,93 @@ def test_a_single_hertz_summit_removes_what_the_hand_calculation_gives():
     assert got.rate[0] * 6e10 == pytest.approx(5.05e4, rel=0.01)
     assert got.gap[0] == 0.0 and got.depth[0] == pytest.approx(depth, rel=1e-12)
     assert got.active_particles[0] == pytest.approx(a_r * n, rel=1e-12)
+    # counted summit by summit (one summit on area_n): M = n A_1 = 252 particles in the contact,
+    # and it would take k* = 1.94 mN / 0.393 uN = 4.9e3 of them to prop it: the same rate
+    summit = abrasive_removal_rate(np.array([p_c]), np.array([a_r]), np.array([0.63]), silica_on_oxide(), np.array([1 / area_n]))
+    assert n * a_real == pytest.approx(252.0, rel=1e-3) and load / F > 4900
+    assert summit.rate[0] == pytest.approx(expected, rel=1e-12)
+
+
+def _few_particle_summit(p_scale=1.0):
+    """One Hertz summit (R = 7 um, interference 0.1 um, E' = 0.55 GPa) on 1e-10 m^2, 1 um silica at phi = 0.06."""
+    R, w, e_pad, area_n = 7e-6, 0.1e-6, 0.55e9, 1e-10
+    a_real = math.pi * R * w
+    load = 4 / 3 * e_pad * math.sqrt(R) * w**1.5 * p_scale
+    return load, a_real, area_n
+
+
+def test_a_summit_holding_few_large_particles_shares_its_load_as_worked_by_hand():
+    """Step 2b (docs/model.md, 13e.1) by hand: k ~ Poisson(M) particles in the summit contact; one is
+    wrapped by the pad (F_w = p_pad pi r^2), two or more prop the summit and share its load F_s."""
+    load, a_real, area_n = _few_particle_summit()
+    d, phi, p_pad = 1e-6, 0.06, 50e6
+    n = 6 * phi / (math.pi * d**2)
+    M = n * a_real  # 0.252 particles per summit contact
+    F_w = p_pad * math.pi * (d / 2) ** 2  # 39.3 uN
+    k_star = load / F_w  # 1.56: one particle is wrapped, two prop the summit
+    assert 0.25 < M < 0.26 and 1 < k_star < 2
+    e_star = E_SIO2 / (2 * (1 - NU_SIO2**2))
+
+    def segment(F):  # elastic (checked below), film takes half the Hertz interference
+        r = d / 2
+        omega = (3 * F / (4 * e_star * math.sqrt(r))) ** (2 / 3)
+        assert omega < (3 * math.pi * (0.454 + 0.41 * NU_SIO2) * H_SIO2 / (4 * e_star)) ** 2 * r
+        depth = omega / 2
+        return r**2 * math.acos(1 - depth / r) - (r - depth) * math.sqrt(2 * r * depth - depth**2)
+
+    per_real_area = sum(math.exp(-M) * M**k / math.factorial(k) * (k / M) * n * segment(F_w if k <= k_star else load / k)
+                        for k in range(1, 40))
+    expected = 0.1 * (a_real / area_n) * 0.63 * per_real_area
+    got = abrasive_removal_rate(np.array([load / area_n]), np.array([a_real / area_n]), np.array([0.63]),
+                                silica_on_oxide(diameter=d), np.array([1 / area_n])).rate[0]
+    assert got == pytest.approx(expected, rel=1e-9)
+    # the summits with two or more particles carry F_s / k < F_w each: counted summit by summit the
+    # rate is lower than the continuum rule (every particle wrapped, M << k* on average)
+    continuum = abrasive_removal_rate(np.array([load / area_n]), np.array([a_real / area_n]), np.array([0.63]), silica_on_oxide(diameter=d)).rate[0]
+    assert got < continuum
+
+
+def test_the_rate_is_continuous_where_a_summit_starts_to_rest_on_its_particles():
+    """Crossing k* = 2 (two wrapped particles carry exactly the summit load) changes nothing abruptly."""
+    load, a_real, area_n = _few_particle_summit()
+    F_w = 50e6 * math.pi * (0.5e-6) ** 2
+    scale = 2 * F_w / load  # summit load at which k* = 2 exactly
+    rates = [abrasive_removal_rate(np.array([scale * (1 + eps) * load / area_n]), np.array([a_real / area_n]), np.array([0.63]),
+                                   silica_on_oxide(diameter=1e-6), np.array([1 / area_n])).rate[0] for eps in (-1e-10, 1e-10)]
+    assert rates[1] / rates[0] - 1 == pytest.approx(0.0, abs=1e-8)
+
+
+@pytest.mark.parametrize("phi, p_pad", [(0.06, 50e6), (0.5, 100e6)])  # pad touches the wafer / particles carry p_r
+def test_summit_counting_tends_to_the_continuum_rule_for_large_summit_contacts(phi, p_pad):
+    pc, ar, u = np.array([48e3, 20e3]), np.array([1e-3, 4e-4]), np.array([1.0, 0.63])
+    c = silica_on_oxide(volume_fraction=phi, pad_pressure=p_pad)
+    continuum = abrasive_removal_rate(pc, ar, u, c).rate
+    summits = abrasive_removal_rate(pc, ar, u, c, np.array([1e5, 1e5])).rate  # A_1 = 4-10 mm^2
+    np.testing.assert_allclose(summits, continuum, rtol=1e-7)
+
+
+def test_particle_size_matters_only_against_the_summit_contact():
+    """At the default contact state (48 kPa: A_r/A_n = 1e-3, 1.42e7 summits/m^2, A_1 = 72 um^2) the
+    summit length is ~5 um: up to 2 um nothing changes; particles as large as the contact remove less."""
+    pc, ar, N = np.array([48e3]), np.array([1e-3]), np.array([1.42e7])
+
+    def rate(d, summits):
+        return abrasive_removal_rate(pc, ar, np.array([1.0]), silica_on_oxide(diameter=d), summits).rate[0]
+
+    for d in (50e-9, 300e-9, 1e-6, 2e-6):
+        assert rate(d, N) == pytest.approx(rate(d, None), rel=1e-12)
+    assert rate(5e-6, N) < rate(2e-6, N) and rate(10e-6, N) < 0.9 * rate(5e-6, N)
+
+
+def test_contact_spot_density_counts_the_summits_above_the_separation():
+    pad = PadSurface(sigma_s=5e-6, asperity_density=2e8, asperity_radius=7e-6, e_star=0.55e9, hardness=50e6, poisson=0.3)
+    D = np.array([-40e-6, 0.0, 7.3e-6, 15e-6, 16e-6])
+    got = contact_spot_density(D, pad)
+    mp = [mpmath.quad(lambda z: mpmath.npdf(z), [d / 5e-6, 3]) / mpmath.ncdf(3) * 2e8 if d < 15e-6 else 0 for d in D]
+    np.testing.assert_allclose(got, [float(v) for v in mp], rtol=1e-12, atol=1e-300)
+    assert got[0] == pytest.approx(2e8, rel=1e-12) and got[-1] == 0.0
+    # every summit in contact has a contact: with the real area it gives a positive mean contact area
+    assert np.all(asperity_contact(D[:3], pad).area_ratio > 0)
 
 
 def test_the_sphere_law_is_the_per_summit_law_of_the_contact_module():
@@ -129,10 +217,16 @@ def test_the_law_is_prestons_where_the_real_contact_area_follows_the_load():
     np.testing.assert_allclose(k_p, k_p.flat[0], rtol=1e-12)
 
 
-def test_zero_loading_removes_nothing_without_a_division_by_zero():
+@pytest.mark.parametrize("summits", [None, np.array([1.4e7, 0.0])])
+def test_zero_loading_removes_nothing_without_a_division_by_zero(summits):
     with np.errstate(all="raise"):
-        got = abrasive_removal_rate(np.array([27e3, 0.0]), np.array([1e-3, 0.0]), np.array([0.63, 0.63]), silica_on_oxide(volume_fraction=0.0))
+        got = abrasive_removal_rate(np.array([27e3, 0.0]), np.array([1e-3, 0.0]), np.array([0.63, 0.63]), silica_on_oxide(volume_fraction=0.0), summits)
     assert np.all(got.rate == 0.0) and np.all(got.active_particles == 0.0)
+
+
+def test_summit_sharing_rejects_negative_counts():
+    with pytest.raises(ValueError, match="mean_count"):
+        summit_sharing(np.array([-1.0]), np.array([1.0]), np.array([1e6]), np.array([1e-7]), np.array([1e12]), 50e6, lambda f, x: f * 0)
 
 
 def test_zero_loading_in_a_solve_gives_zero_removal_and_says_so():
@@ -235,11 +329,13 @@ def test_the_two_step_constants_can_be_calibrated(tmp_path):
 
 def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_computes():
     """docs/model.md 13e.6, CHANGELOG: base case 117.53 nm/min with the abrasive law (88.41 with the
-    shear-power law, the default before issue 24); 187.31 nm/min at Lai's conditions for copper and alumina."""
-    base = cmpsim.solve(relative=False)
-    old = cmpsim.solve(relative=False, removal_law="shear_power")
+    shear-power law, the default before issue 24); 187.31 nm/min at Lai's conditions for copper and alumina.
+    On the equal-ring 24x64 grid, where the docs quote them (the edge-graded default grid of issue 23
+    gives 118.10, 88.85 and 188.37)."""
+    base = cmpsim.solve(relative=False, grid="24x64")
+    old = cmpsim.solve(relative=False, removal_law="shear_power", grid="24x64")
     lai = cmpsim.solve(relative=False, film="copper", abrasive="alumina", applied_pressure="48 kPa", rotation_speed="75 rpm",
-                       centre_distance="89.13 mm", wafer_diameter="100 mm", particle_diameter="300 nm")
+                       centre_distance="89.13 mm", wafer_diameter="100 mm", particle_diameter="300 nm", grid="24x64")
     assert round(base.removal_rate_mean * 6e10, 2) == 117.53
     assert round(old.removal_rate_mean * 6e10, 2) == 88.41
     assert round(lai.removal_rate_mean * 6e10, 2) == 187.31

@@ -32,6 +32,16 @@ def test_run_json_equals_python_api():
     assert json.loads(res.stdout) == json.loads(api.to_json())
 
 
+def test_run_relative_asks_for_the_relative_removal_rate():
+    """Issue 23: the default model gives removal_rate_relative (and solves its reference case) on request only."""
+    plain = json.loads(CliRunner().invoke(main, ["run", "--json", "--set", "grid=coarse"]).stdout)
+    asked = json.loads(CliRunner().invoke(main, ["run", "--json", "--relative", "--set", "grid=coarse"]).stdout)
+    assert "removal_rate_relative" not in plain["values"] and asked["values"]["removal_rate_relative"] > 0
+    assert asked["units"]["removal_rate_relative"] == "1"
+    paper = json.loads(CliRunner().invoke(main, ["run", "--json", "--no-relative", "--preset", "paper", "--set", "grid=coarse"]).stdout)
+    assert "removal_rate_relative" not in paper["values"]
+
+
 def test_run_table_gives_every_output_its_unit_in_the_unit_column():
     import re
 
@@ -115,7 +125,7 @@ NAN_WARNING = (
 
 def test_console_script_prints_cmpsims_warning_as_one_line_without_the_source_echo():
     proc = subprocess.run(
-        [sys.executable, "-m", "cmpsim.cli", "run", "--json", "--set", "pad_compliance=rigid", "--grid", "coarse"],
+        [sys.executable, "-m", "cmpsim.cli", "run", "--json", "--relative", "--set", "pad_compliance=rigid", "--grid", "coarse"],
         capture_output=True, text=True, check=False,
     )
     assert proc.returncode == 0, proc.stderr
@@ -129,7 +139,7 @@ def test_the_warning_display_is_the_commands_own_and_restored_after_it():
     import cmpsim.cli
 
     before = warnings.showwarning
-    res = CliRunner().invoke(main, ["run", "--json", "--set", "pad_compliance=rigid", "--grid", "coarse"])
+    res = CliRunner().invoke(main, ["run", "--json", "--relative", "--set", "pad_compliance=rigid", "--grid", "coarse"])
     assert res.exit_code == 0, res.output
     assert res.stderr == NAN_WARNING
     assert warnings.showwarning is before  # importing or running the CLI leaves the library's warnings alone

@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -110,7 +111,29 @@ def test_every_parameter_has_a_source_and_a_valid_default():
 def test_grid_presets_are_valid_polar_grids():
     for nr, nt in GRID_PRESETS.values():
         assert nr >= 3 and nt >= 8 and nt % 2 == 0
-    assert Config.default().replace(grid="fine").grid_shape == GRID_PRESETS["fine"]
+    assert Config.default().replace(grid="fine", grid_grading="uniform").grid_shape == GRID_PRESETS["fine"]
+    assert Config.paper().replace(grid="fine").grid_shape == GRID_PRESETS["fine"]  # the paper preset: equal rings
+    assert Config.default().replace(grid="48x128").grid_shape == (48, 128)  # rings x sectors: equal rings
+
+
+def test_a_named_grid_means_one_rim_ring_width_on_every_wafer():
+    """Issue 23: the named grids are graded towards the edge with the rim ring of GRID_EDGE on
+    3-inch and 300 mm wafers alike; the central rings are R/GRID_PRESETS rings wide; each
+    preset halves the rings of the coarser one (same ring map)."""
+    from cmpsim.config import GRID_EDGE
+
+    for name, (edge, growth) in GRID_EDGE.items():
+        for d, c in ((0.0762, 0.1524), (0.3, 0.2)):
+            g = Config.default().replace(grid=name, wafer_diameter=d, centre_distance=c).polar_grid()
+            w = g.widths[:, 0]
+            assert g.graded and g.n_theta == GRID_PRESETS[name][1]
+            assert w[-1] == pytest.approx(edge * (1 + growth / 2), rel=0.1), (name, d)  # the mean width over the rim ring
+            assert w[0] == pytest.approx(g.radius / GRID_PRESETS[name][0], rel=0.15), (name, d)
+            assert np.all(np.diff(w) <= 1e-12)  # narrowing monotonically towards the rim
+    for d in (0.0762, 0.3):
+        g1, g2 = (Config.default().replace(grid=n, wafer_diameter=d, centre_distance=0.2).polar_grid() for n in ("default", "fine"))
+        assert abs(g2.n_r - 2 * g1.n_r) <= 1 and g2.n_theta == 2 * g1.n_theta
+        assert (g1.edge_ratio, g1.edge_length) == pytest.approx((g2.edge_ratio, g2.edge_length), rel=1e-12)
 
 
 def test_parameter_table_in_model_document_is_generated_from_the_registry():

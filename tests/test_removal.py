@@ -33,7 +33,7 @@ def test_wafer_mean_shear_power_rate_tends_to_preston_when_the_pad_carries_the_w
 def test_relative_removal_rate_is_nan_with_a_warning_when_the_reference_case_removes_nothing():
     # a rigid pad with the measured 5 um summits hydroplanes at the reference case: no contact, no removal
     with pytest.warns(RuntimeWarning, match="removal_rate_relative is undefined"):
-        r = cmpsim.solve(pad_compliance="rigid", grid="coarse")
+        r = cmpsim.solve(pad_compliance="rigid", grid="coarse", relative=True)
     assert np.isnan(r.scalars["removal_rate_relative"])
     assert '"removal_rate_relative": null' in r.to_json()
 
@@ -48,3 +48,20 @@ def test_shear_power_removal_of_the_default_model_is_the_shear_power_of_the_cont
     preston = c.shear_power_coefficient * c.friction_coefficient * c.applied_pressure * r.sliding_speed
     assert 0 < r.fluid_load_fraction < 0.05
     assert r.removal_rate_mean == pytest.approx(preston * r.contact_load_fraction, rel=1e-9)
+
+
+def test_the_reference_case_is_solved_only_when_its_ratio_is_wanted(monkeypatch):
+    """Issue 23: removal_rate_relative (and its reference solve) comes by default with the paper's
+    removal law only; the predictive default gives it when asked, and its JSON omits it otherwise."""
+    import cmpsim.model as model
+
+    solved = []
+    monkeypatch.setattr(model, "_REFERENCE_CACHE", {})
+    real = model._reference_removal_rate
+    monkeypatch.setattr(model, "_reference_removal_rate", lambda ref: solved.append(ref) or real(ref))
+    d = cmpsim.solve(grid="coarse")
+    assert not solved and "removal_rate_relative" not in d.scalars and "removal_rate_relative" not in d.to_json()
+    p = cmpsim.solve(cmpsim.Config.paper(), grid="coarse", applied_pressure="3 psi")
+    assert len(solved) == 1 and p.scalars["removal_rate_relative"] > 0
+    asked = cmpsim.solve(grid="coarse", relative=True)
+    assert len(solved) == 2 and asked.scalars["removal_rate_relative"] == pytest.approx(asked.scalars["removal_rate_mean"] / model._REFERENCE_CACHE[tuple(sorted(solved[-1].to_dict().items()))])

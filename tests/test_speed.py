@@ -195,3 +195,27 @@ def test_a_coarse_first_step_that_leads_nowhere_falls_back_to_the_plain_cold_sta
     plain = solve_equilibrium(_problem(), warm_start=False)
     np.testing.assert_allclose(got.state.u[:2], plain.state.u[:2], rtol=1e-8)
     assert np.max(np.abs(got.state.residual)) < 1e-9
+
+
+def test_a_warm_chain_on_the_compliant_pad_starts_from_the_last_equilibrium():
+    """Issue 23: along a chain of warm starts (sweeps), the coupled solve starts from the last
+    equilibrium's slurry pressure, deflection and factorisation: fewer factorisations than the
+    same points solved alone, the same positions (to the Newton tolerance)."""
+    import cmpsim
+    from cmpsim.config import Config
+
+    base = Config.default().replace(grid="coarse")
+    psi = (3.0, 3.3, 3.6, 3.9)
+    cold = [cmpsim.solve(base.replace(applied_pressure=f"{p} psi"), relative=False) for p in psi]
+    u, chain = None, []
+    for p in psi:
+        r = cmpsim.solve(base.replace(applied_pressure=f"{p} psi"), relative=False, start=u)
+        u = [r.h0, r.attack_angle, r.cross_tilt]
+        chain.append(r)
+    lu_cold = sum(int(r.scalars["factorizations"]) for r in cold[1:])
+    lu_chain = sum(int(r.scalars["factorizations"]) for r in chain[1:])
+    assert lu_chain < lu_cold, (lu_chain, lu_cold)
+    for a, b in zip(cold, chain):
+        assert b.h0 == pytest.approx(a.h0, rel=1e-7)
+        assert b.attack_angle == pytest.approx(a.attack_angle, rel=1e-6)
+        assert b.removal_rate_mean == pytest.approx(a.removal_rate_mean, rel=1e-7)

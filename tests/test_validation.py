@@ -122,9 +122,11 @@ def test_the_default_model_beats_the_mean_on_all_four_removal_series(shipped):
 
 
 def test_the_default_model_is_flat_in_particle_size_and_fails_lais_size_series(shipped):
-    """Kept failing on purpose (docs/model.md, 13e.6): at a fixed mass loading the abrasive law has no
-    length to measure the particle against, so 50, 300 and 1000 nm alumina on copper remove alike;
-    Lai measured 51 / 112 / 133 nm/min. Predicting the mean does as well: no pass."""
+    """Kept failing on purpose (docs/model.md, 13e.1 step 2b and 13e.6): the particles are counted
+    summit by summit, but the summit contacts (radius ~4.8 um at 48 kPa) are far larger than the
+    particles and the pad's flow pressure caps each particle's load at p_pad pi r^2, so 50, 300 and
+    1000 nm alumina on copper remove alike; Lai measured 51 / 112 / 133 nm/min. Predicting the
+    mean does as well: no pass."""
     d = shipped.dataset("lai2001_cu_alumina_size")
     pts = shipped.points_of("lai2001_cu_alumina_size")
     assert [p.measured for p in pts] == [51.0, 112.0, 133.0]

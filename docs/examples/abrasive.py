@@ -13,7 +13,9 @@ What it shows (the numbers are printed below):
 1. **At a fixed solids loading by mass the rate does not depend on the particle size** (50 nm
    to 2 um: the same rate to round-off). The count of trapped particles falls as 1/d², the
    load each one carries (the pad's flow pressure over its section) and the groove it ploughs
-   grow as d²: the model has no length against which the particle size could be measured.
+   grow as d². The particles are counted summit by summit, but the summit contacts (radius
+   about 4.5 um) are far larger than the particles: the only length the contact offers does
+   not act below 2 um ([model, 13e.1, step 2b](../model.md#13e1-the-chain-step-by-step)).
    Lai measured a 2.6-fold rise from 50 to 1000 nm for copper and alumina; the model does not
    reproduce it ([validation](../validation.md)).
 2. **The rate is proportional to the solids loading** while the pad touches the wafer between

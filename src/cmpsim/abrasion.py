@@ -18,6 +18,11 @@ Dornfeld (IEEE Trans. Semicond. Manuf. 14, 112 (2001); 16, 469 (2003)), Zhao & C
    touches the wafer between them and each is embedded by its diameter (g = 0); otherwise the
    pad rests on the largest particles at the gap g > 0 where sum n F(x - g) = p_r (the size
    distribution then decides which particles work: Luo & Dornfeld 2003).
+2b. **Summit by summit** (:func:`summit_sharing`, when the summits in contact per area N are
+   given): a summit contact of mean area A_1 = (A_r/A_n)/N holds a Poisson number k of
+   particles (mean M = A_1 sum n); it touches the wafer around them while k <= k* = F_s / F_w
+   (F_s = p_r A_1 its load, F_w = p_pad <pi x^2/4> the most the pad presses a particle with) and
+   rests on them, sharing F_s, beyond. The continuum rule of step 2 is its limit A_1 -> infinity.
 3. **Indentation into the film.** A sphere of radius x/2 pressed on the film with force F sinks
    by the interference omega of the elastic (Hertz) / elastoplastic (Zhao–Maietta–Chang) /
    plastic law of the pad summits (``cmpsim.contact``), with the particle-film effective modulus
@@ -40,6 +45,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.stats import poisson
 
 __all__ = [
     "AbrasiveContact",
@@ -50,6 +56,7 @@ __all__ = [
     "groove_area",
     "pad_force",
     "pad_gap",
+    "summit_sharing",
     "abrasive_removal_rate",
     "PLASTIC_RATIO",
 ]
@@ -59,6 +66,8 @@ PLASTIC_RATIO = 54.0
 #: Gauss–Hermite nodes of the log-normal size distribution.
 SIZE_NODES = 16
 _BISECTIONS = 60
+#: Summit particle counts k evaluated per block in :func:`summit_sharing`.
+_K_CHUNK = 256
 
 
 @dataclass(frozen=True)
@@ -246,7 +255,59 @@ def pad_gap(real_pressure, diameters, counts, pad_pressure):
     return np.where(dense, 0.5 * (lo + hi), 0.0)[..., 0]
 
 
-def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive: AbrasiveContact) -> AbrasionResult:
+def summit_sharing(mean_count, wrap_count, real_pressure, diameters, counts, pad_pressure, film_groove):
+    """Groove section swept per unit real contact area, sum n A_g (m^2 per m^2), with the particles
+    counted summit by summit (docs/model.md, 13e.1, step 2b).
+
+    A summit contact of area A_1 holds k particles, Poisson with mean M = A_1 sum_i n_i
+    (``mean_count``); the pad can press them, each embedded by its whole diameter, with at
+    most k F_w, F_w = p_pad <pi x^2/4> the mean wrapped load. While k F_w <= F_s = p_r A_1, i.e.
+    k <= k* = F_s / F_w (``wrap_count``), the pad touches the wafer around them and each
+    carries F_w; a summit holding more props itself on them and they share F_s (the gap of
+    :func:`pad_gap` at the pressure p_r M / k). With the Poisson identity k P(k; M) / M =
+    P(k - 1; M):
+
+        sum n A_g = CDF(floor(k*) - 1; M) sum_i n_i A_g,i(F_w,i)
+                    + sum_{k > k*} P(k - 1; M) sum_i n_i A_g,i(F_i(g_k)).
+
+    As M -> infinity (particles far smaller than the summit contact) this is the continuum rule
+    of :func:`pad_gap` at p_r; no division by M, so M = 0 (no abrasive) gives 0.
+    ``film_groove(load, x)`` is the groove section (m^2) of a particle of diameter x under load.
+    """
+    shape = np.shape(mean_count)
+    M = np.asarray(mean_count, dtype=float).ravel()
+    ks = np.broadcast_to(np.asarray(wrap_count, dtype=float), shape).ravel()
+    p_r = np.broadcast_to(np.asarray(real_pressure, dtype=float), shape).ravel()
+    if not (np.all(np.isfinite(M)) and np.all(M >= 0) and np.all(ks >= 0) and np.all(np.isfinite(ks))):
+        raise ValueError("mean_count and wrap_count must be finite and >= 0 (particles per summit contact)")
+    x = np.asarray(diameters, dtype=float)
+    f_wrap = pad_force(x, 0.5 * x, pad_pressure)
+    swept_wrap = np.sum(counts * film_groove(f_wrap, x), axis=-1)
+    k_floor = np.floor(ks)
+    some = M > 0
+    m_safe = np.where(some, M, 1.0)
+    out = np.where(some, poisson.cdf(k_floor - 1.0, m_safe), 0.0) * swept_wrap
+    # propped summits: k from floor(k*) + 1 to M + 12 sqrt(M) + 40, beyond which the Poisson mass is
+    # below exp(-60) (Chernoff: P(K >= M + t) <= exp(-t^2 / (2 (M + t/3))))
+    k_hi = np.where(some, np.ceil(M + 12.0 * np.sqrt(M) + 40.0), 0.0)
+    first = k_floor + 1.0
+    span = int(np.max(np.maximum(k_hi - first, 0.0), initial=0.0))
+    for j0 in range(0, span, _K_CHUNK):
+        k = first[..., None] + np.arange(j0, min(j0 + _K_CHUNK, span))  # (points, chunk)
+        live = k <= k_hi[..., None]
+        weight = np.where(live, poisson.pmf(k - 1.0, m_safe[:, None]), 0.0)
+        if not np.any(weight > 0):
+            continue
+        idx = np.nonzero(weight > 0)
+        pressure = p_r[idx[0]] * M[idx[0]] / k[idx]
+        gap = pad_gap(pressure, x, counts, pad_pressure)
+        load = pad_force(x - gap[:, None], 0.5 * x, pad_pressure)
+        swept = np.sum(counts * film_groove(load, x), axis=-1)
+        np.add.at(out, idx[0], weight[idx] * swept)
+    return out.reshape(shape)
+
+
+def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive: AbrasiveContact, spot_density=None) -> AbrasionResult:
     """Mechanical removal rate of the abrasive law at each point, m/s (module docstring, steps 1-5).
 
     Parameters
@@ -258,6 +319,11 @@ def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive:
     sliding_speed : array
         |u_pad - u_wafer|, m/s.
     abrasive : AbrasiveContact
+    spot_density : array, optional
+        Summits in contact per unit nominal area N, 1/m^2 (:func:`cmpsim.contact.contact_spot_density`):
+        the particles are then counted summit by summit (:func:`summit_sharing`), with the
+        mean summit contact A_1 = (A_r/A_n)/N. ``None``: the limit of summit contacts far larger
+        than the particles (A_1 -> infinity), the continuum rule of :func:`pad_gap`.
 
     Returns
     -------
@@ -274,10 +340,19 @@ def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive:
     in_contact = ar > 0
     p_r = np.where(in_contact, pc / np.where(in_contact, ar, 1.0), 0.0)
     gap = np.where(in_contact, pad_gap(p_r, x, n_i, a.pad_pressure), 0.0)
-    load = pad_force(x - gap[..., None], 0.5 * x, a.pad_pressure)  # (points, size classes)
-    omega = interference(load, 0.5 * x, a.e_star, a.hardness, a.k_factor)
-    depth = a.film_share * omega
-    swept = np.sum(n_i * groove_area(0.5 * x, depth), axis=-1)  # m^2 per unit real area
+
+    def film_groove(load, diameter):
+        return groove_area(0.5 * diameter, a.film_share * interference(load, 0.5 * diameter, a.e_star, a.hardness, a.k_factor))
+
+    if spot_density is None:
+        load = pad_force(x - gap[..., None], 0.5 * x, a.pad_pressure)  # (points, size classes)
+        swept = np.sum(n_i * film_groove(load, x), axis=-1)  # m^2 per unit real area
+    else:
+        N = np.asarray(spot_density, dtype=float)
+        spot = np.where(in_contact & (N > 0), ar / np.where(N > 0, N, 1.0), 0.0)  # A_1, m^2
+        # k* = F_s / F_w: sections of the mean particle the summit load fills at the pad pressure
+        wrap = p_r * spot / (a.pad_pressure * np.pi * np.sum(w * x * x * x) / (4.0 * np.sum(w * x)))
+        swept = summit_sharing(spot * np.sum(n_i), wrap, p_r, x, n_i, a.pad_pressure, film_groove)
     rate = np.where(in_contact, a.efficiency * ar * speed * swept, 0.0)
     active = ar * np.sum(n_i * (x > gap[..., None]), axis=-1)
     f_mean = np.where(in_contact, pad_force(a.diameter - gap, 0.5 * a.diameter, a.pad_pressure), 0.0)

@@ -120,7 +120,12 @@ def main(ctx):
 @click.option("--schema", "schema", type=click.Choice(["1", "2"]), default="2", show_default=True, help="JSON layout of --json and result.json: 2, or the flat object of cmpsim 0.1 (deprecated).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Also write fields.nc, maps.png, profile.png, result.json and config.toml to DIR.")
 @click.option("--check-roots", is_flag=True, help="Scan the attack angle for other equilibria (adds moment_roots_found).")
-def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir, check_roots):
+@click.option(
+    "--relative/--no-relative",
+    default=None,
+    help="Give removal_rate_relative (solves the reference case too); default: only with the paper's removal law (the paper preset).",
+)
+def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir, check_roots, relative):
     """Solve one operating point (the paper's base case by default).
 
     CONFIG is an optional TOML file, the same as --config (sections `[wafer]` `[process]`
@@ -137,7 +142,7 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
     except ValueError as exc:
         _fail(str(exc))
     try:
-        result = solve(cfg, check_roots=check_roots)
+        result = solve(cfg, check_roots=check_roots, relative=relative)
     except EquilibriumError as exc:
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:

@@ -33,11 +33,18 @@ __all__ = [
     "parameter_table_markdown",
     "zone_mean_pressure",
     "GRID_PRESETS",
+    "GRID_EDGE",
     "PRESETS",
 ]
 
-#: Named grids: rings x sectors of the polar finite-volume grid (see docs/model.md, "Grid").
+#: Named grids: central rings x sectors of the polar finite-volume grid (see docs/model.md,
+#: "Grid"); with ``grid_grading = "uniform"`` (the paper preset) the rings x sectors of equal rings.
 GRID_PRESETS = {"coarse": (8, 24), "default": (24, 64), "fine": (48, 128)}
+#: Edge grading of the named grids (``grid_grading = "edge"``): (width of the rim ring, m;
+#: growth of the ring width inwards per ring). Each preset halves the next finer one's rings
+#: everywhere, so all share one ring map on a given wafer, and the rim ring has the same width
+#: on every wafer: one preset, one accuracy at the edge (``docs/model.md``, "Grid").
+GRID_EDGE = {"coarse": (0.9e-3, 0.45), "default": (0.3e-3, 0.15), "fine": (0.15e-3, 0.075)}
 
 
 @dataclass(frozen=True)
@@ -180,6 +187,7 @@ PARAMETERS: dict[str, Param] = {
         # ---------------------------------------------------------------- numerics
         _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
         _P("grid", "numerics", "-", "grid", "", "default", "Polar grid: preset or rings x sectors", "docs/model.md ('Grid')"),
+        _P("grid_grading", "numerics", "-", "choice", "", "edge", "Rings of the named grids: graded towards the wafer edge (a preset fixes the rim ring width: 0.9 / 0.3 / 0.15 mm), or equally wide ('uniform'; always for rings x sectors)", "docs/model.md ('Grid'); 'uniform' is the paper preset's (cmpsim 0.1) grid", choices=("edge", "uniform")),
         _P("flow_factor_floor", "numerics", "Phi_min", "", "", 0.05, "Smallest eigenvalue of the pressure flow-factor tensor passed to the solver", "docs/model.md ('Flow-factor validity')", 0.0, 1.0, True, False),
         _P("tolerance", "numerics", "-", "", "", 1e-9, "Newton tolerance on the relative load and moment residuals", "-", 0.0, 1e-3, True, False),
         _P("max_iterations", "numerics", "-", "", "", 40, "Newton steps allowed", "-", 1.0, 1000.0, False, False),
@@ -201,6 +209,7 @@ PRESETS: dict[str, dict[str, Any]] = {
         "slurry_viscosity": 5e-3,
         "cavitation": "none",
         "pad_compliance": "rigid",
+        "grid_grading": "uniform",
         # SI floats, exactly the defaults of cmpsim 0.1.0 ("15 um" would parse to 1.4999999999999999e-05 m)
         "pad_modulus": 100e6,
         "pad_hardness": 9.4e6,
@@ -554,12 +563,23 @@ class Config:
 
     @property
     def grid_shape(self) -> tuple[int, int]:
-        """(rings, sectors) of the polar grid."""
-        g = self.numerics.grid
+        """(rings, sectors) of the polar grid (:meth:`polar_grid`)."""
+        g = self.polar_grid()
+        return g.n_r, g.n_theta
+
+    def polar_grid(self):
+        """The :class:`cmpsim.grid.PolarGrid` of this configuration: a named grid graded towards the
+        edge (:data:`GRID_EDGE`) unless ``grid_grading = "uniform"``; rings x sectors: equal rings."""
+        from .grid import PolarGrid, edge_graded_grid
+
+        g, radius = self.numerics.grid, 0.5 * self.wafer.wafer_diameter
         if g in GRID_PRESETS:
-            return GRID_PRESETS[g]
+            n_r, n_t = GRID_PRESETS[g]
+            if self.numerics.grid_grading == "edge":
+                return edge_graded_grid(radius, n_r, n_t, *GRID_EDGE[g])
+            return PolarGrid(radius, n_r, n_t)
         nr, nt = g.split("x")
-        return int(nr), int(nt)
+        return PolarGrid(radius, int(nr), int(nt))
 
     def describe(self) -> list[tuple[str, str, str, str]]:
         """Rows (name, value in display unit, display unit, source) for provenance and tables."""

@@ -39,7 +39,7 @@ from functools import cached_property, lru_cache
 import numpy as np
 from scipy.special import ndtr
 
-__all__ = ["PadSurface", "ContactResult", "ContactTable", "contact_table", "asperity_contact", "asperity_laws", "MODELS"]
+__all__ = ["PadSurface", "ContactResult", "ContactTable", "contact_table", "asperity_contact", "asperity_laws", "contact_spot_density", "MODELS"]
 
 MODELS = ("lep", "elastic")
 
@@ -254,6 +254,22 @@ def asperity_contact(separation, pad: PadSurface, model: str = "lep") -> Contact
     parts = [_contact_block(flat[i : i + _BLOCK], pad, model) for i in range(0, max(flat.size, 1), _BLOCK)]
     fields_ = {k: np.concatenate([p[k] for p in parts]).reshape(shape) for k in parts[0]}
     return ContactResult(**fields_)
+
+
+def contact_spot_density(separation, pad: PadSurface) -> np.ndarray:
+    """Summits in contact per unit nominal area at the separation D, 1/m^2.
+
+    eta_a / Phi(cutoff) * (Phi(cutoff) - Phi(D / sigma_s)): the summits whose height exceeds D
+    (Greenwood & Williamson, Proc. R. Soc. A 295, 300 (1966), eq. 7, with the paper's
+    truncation of the heights at ``height_cutoff`` sigma_s); 0 where D is above the cutoff.
+    With :func:`asperity_contact` it gives the mean summit contact, area (A_r/A_n)/N and load
+    p_c/N, used by the abrasive removal law (docs/model.md, 13e.1).
+    """
+    d = np.asarray(separation, dtype=float) / pad.sigma_s
+    cut = pad.height_cutoff
+    # upper tail difference, Phi(cut) - Phi(d) = Phi(-d) - Phi(-cut) (no cancellation for d > 0)
+    mass = ndtr(-d) - (ndtr(-cut) if np.isfinite(cut) else 0.0)
+    return pad.asperity_density / pad._normaliser * np.maximum(mass, 0.0)
 
 
 def _contact_block(d: np.ndarray, pad: PadSurface, model: str) -> dict:

@@ -138,6 +138,7 @@ def solve_equilibrium(
             raise
         # the coarse grid's first step led nowhere on this grid: start again as without it
         return solve_equilibrium(problem, None, tol, max_iter, max_step, warm_start=False)
+    problem.pad_model.end_chain(problem)
     if problem._reference is not None:
         cache = _last_factors()
         if len(cache) > 8:
@@ -154,6 +155,8 @@ def _from_start(problem: WaferProblem, start, warm: bool, tol: float, max_iter: 
         # a warm start continues a chain of neighbouring points (sweeps, `cmpsim reproduce`):
         # refine against the last factorisation made on this grid (in this thread)
         problem._reference = _last_factors().get(problem.grid)
+    if warm:
+        problem.pad_model.resume_chain(problem)
     try:
         st = problem.state(u)
     except ValueError:

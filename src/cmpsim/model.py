@@ -12,7 +12,7 @@ from .equilibrium import EquilibriumError, WaferProblem, scan_moment_roots, solv
 from .postprocess import evaluate_outputs
 from .setup import HAFF_T, PhysicalSetup, build_problem, effective_modulus, physical_setup
 
-__all__ = ["build_problem", "solve", "PhysicalSetup", "physical_setup", "EquilibriumError", "REFERENCE_CASE", "reference_config", "HAFF_T", "effective_modulus"]
+__all__ = ["build_problem", "solve", "PhysicalSetup", "physical_setup", "EquilibriumError", "REFERENCE_CASE", "reference_config", "wants_relative", "HAFF_T", "effective_modulus"]
 
 #: The paper's normalisation point of the relative removal rate (Figs. 11-12) with its base
 #: load and speed (Table 1). The pad roughness of the reference case is the configuration's
@@ -29,6 +29,16 @@ def reference_config(config: Config) -> Config:
     return config.replace(model="lep", pad_roughness=config.reference_roughness, zone_pressures="", **REFERENCE_CASE)
 
 
+def wants_relative(config: Config) -> bool:
+    """Whether :func:`solve` gives ``removal_rate_relative`` unless told: with the paper's removal
+    law (the paper preset), whose figures 11-12 are in removal rate relative to the reference
+    case. The predictive removal law gives absolute rates (m/s), and its reference solve would
+    double the cost of a first solve; ask for it with ``relative=True`` (``--relative``)."""
+    from .models import removal_law
+
+    return removal_law(config).relative_by_default
+
+
 def _reference_removal_rate(ref: Config) -> float:
     """Removal rate of the reference case ``ref``, solved from the cold start once per process."""
     key = tuple(sorted(ref.to_dict().items()))
@@ -42,7 +52,7 @@ def _reference_removal_rate(ref: Config) -> float:
 def solve(
     config: Config | None = None,
     start=None,
-    relative: bool = True,
+    relative: bool | None = None,
     check_roots: bool = False,
     problem: WaferProblem | None = None,
     reference_removal_rate: float | None = None,
@@ -56,10 +66,12 @@ def solve(
         Inputs; default :meth:`Config.default` (the predictive model at the paper's base operating point; :meth:`Config.paper` is the paper's model).
     start : array_like, optional
         Initial (h0 [m], attack angle [rad], cross tilt [rad]) for Newton (warm start).
-    relative : bool
+    relative : bool or None
         Also give ``removal_rate_relative``: the removal rate over that of the reference case
         (:func:`reference_config`: LEP model, d = 100 nm, sigma = reference_roughness (15 um in the paper preset), 4 psi, 60 rpm, other
-        inputs equal), solved from the cold start once per process unless given.
+        inputs equal), solved from the cold start once per process unless given. None (the
+        default): only with the paper's removal law (:func:`wants_relative`), whose figures
+        are in this ratio; the reference solve costs as much as the point itself.
     check_roots : bool
         Also scan the attack angle for other moment roots (about 13 load balances); adds
         the scalar ``moment_roots_found`` and ``result.root_scan``.
@@ -93,6 +105,8 @@ def solve(
         problem = build_problem(config, setup)
     sol = problem.carrier.equilibrium(problem, solve_equilibrium, start=start, tol=config.tolerance, max_iter=config.max_iterations)
     scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
+    if relative is None:
+        relative = wants_relative(config)
     if relative:
         if reference_removal_rate is None:
             ref = reference_config(config)

@@ -227,9 +227,10 @@ _LAYER_OPERATORS: dict = {}
 class _LayerOperator:
     """Deflection of the nonlocal compliance on a periodic Cartesian grid, seen from the polar grid.
 
-    The square auxiliary grid (spacing dr/2) covers the wafer and a margin of six coupling
-    lengths (at least 4 dr) around it, so that the periodic images of the wafer interact only
-    through tails that have decayed by about e^-12. The pressure of a polar cell field is
+    The square auxiliary grid (spacing dr/2, dr the widest ring: the central rings of an
+    edge-graded grid) covers the wafer and a margin of six coupling lengths (at least 4 dr)
+    around it, so that the periodic images of the wafer interact only through tails that have
+    decayed by about e^-12. The pressure of a polar cell field is
     interpolated to the Cartesian cell centres (PolarGrid.interpolate) and weighted by the
     share of each Cartesian cell inside the wafer (16 sub-points per cell); the deflection
     w = IFFT(C(q) FFT(p)) is interpolated back to the polar cell centres (bilinear).
@@ -239,8 +240,9 @@ class _LayerOperator:
         from scipy.fft import next_fast_len
 
         R = grid.radius
-        h = 0.5 * grid.dr
-        margin = max(6.0 * foundation.coupling_length, 4.0 * grid.dr)
+        dr = float(np.max(grid.widths))  # the central ring width (graded rings: not the rim's)
+        h = 0.5 * dr
+        margin = max(6.0 * foundation.coupling_length, 4.0 * dr)
         n = next_fast_len(int(np.ceil(2.0 * (R + margin) / h)), real=True)
         self.n, self.h = n, h
         c = -0.5 * n * h + (np.arange(n) + 0.5) * h

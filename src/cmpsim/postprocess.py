@@ -13,6 +13,7 @@ import numpy as np
 from . import outputs, uniformity
 from .config import Config
 from .models import removal_law as _removal_law
+from .contact import contact_spot_density
 from .removal import contact_shear_stress
 from .setup import PhysicalSetup
 from .state import EquilibriumSolution
@@ -55,6 +56,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "relative_speed": lambda: np.hypot(dux, duy),
         "contact_area_ratio": lambda: ar,
         "film_thickness": lambda: st.h,
+        "contact_spot_density": lambda: contact_spot_density(st.h - problem.separation_offset, problem.pad),
     }
     rr = law.rate(**{name: fields[name]() for name in law.needs})
     # film thickness: centre, and minimum over the cell centres and the rim
@@ -119,9 +121,9 @@ def reduce_outputs(polar: dict, grid, load: float, edge_exclusion: float, explic
         elif o.reduction == "load_share":
             computed[name] = grid.integrate(polar[o.of[0]]) / load
         elif o.reduction == "profile_std_over_mean":
-            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion)[0]
+            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion, grid.ring_faces)[0]
         elif o.reduction == "profile_range":
-            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion)[1]
+            computed[name] = uniformity.uniformity(profiles[o.of[0]], grid.radius, edge_exclusion, grid.ring_faces)[1]
     for name in outputs.scalar_names():
         o = outputs.scalar(name)
         if o.reduction == "sum":

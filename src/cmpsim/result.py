@@ -335,10 +335,7 @@ class Result:
         """The radial profiles on the ``radius`` coordinate (m, with ring bounds), CF attributes."""
         import xarray as xr
 
-        g = self.grid
-        from .uniformity import ring_edges
-
-        edges = ring_edges(g.radius, g.n_r)
+        edges = self.grid.ring_faces
         radius_attrs = dict(_reg.profile("radius").cf_attrs, bounds="radius_bounds")
         data = {
             n: ("radius", np.asarray(self.profiles[n], dtype=float), dict(_reg.profile(n).cf_attrs, comment=_reg.REDUCTIONS["ring_mean"]))

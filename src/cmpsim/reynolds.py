@@ -25,7 +25,7 @@ Discretisation: conservative cell-centred finite volumes on :class:`cmpsim.grid.
 two-point normal gradients, cross-gradient (off-diagonal tensor) terms from averaged central
 differences, the Dirichlet edge at half a cell from the last centres. The observed order is
 2 (``tests/test_reynolds.py``, manufactured solutions). Solved with a sparse LU
-(``scipy.sparse.linalg.splu``); any callable ``solver(A) -> object with .solve(b)`` can be
+(:func:`cmpsim.sparse.factorize`); any callable ``solver(A) -> object with .solve(b)`` can be
 injected.
 """
 
@@ -35,12 +35,12 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from .flowfactors import RoughnessGeometry, pressure_flow_factors, regularize_pressure_tensor, shear_flow_factors
 from .grainflow import grain_coefficients
 from .grid import PolarGrid
 from .kinematics import Kinematics
+from .sparse import factorize as guarded_factorize
 
 __all__ = [
     "SLURRY_MODELS",
@@ -202,7 +202,8 @@ def _operator_entries(grid: PolarGrid):
     ``A[rows[k], cols[k]]``, where ``c`` stacks, each flattened like the grid, D_rr and D_rt
     on the radial faces and D_tt and D_tr on the angular ones (4 N values). Geometry only.
     """
-    n_r, n_t, dr, dth, N = grid.n_r, grid.n_theta, grid.dr, grid.dtheta, grid.size
+    n_r, n_t, dth, N = grid.n_r, grid.n_theta, grid.dtheta, grid.size
+    gap = np.broadcast_to(grid.spacings, (n_r, n_t))  # centre to next centre (last: to the rim)
     rows, cols, src, wts = [], [], [], []
     i = np.arange(n_r)[:, None] * np.ones((1, n_t), dtype=int)
     j = np.arange(n_t)[None, :] * np.ones((n_r, 1), dtype=int)
@@ -220,12 +221,12 @@ def _operator_entries(grid: PolarGrid):
 
     # ---- radial faces (outer face of each cell): c[0:N] = D_rr, c[N:2N] = D_rt
     _, _, length = grid.radial_faces
-    rf = (i + 1.0) * dr
+    rf = np.broadcast_to(grid.ring_faces[1:, None], (n_r, n_t))
     interior = i < n_r - 1
     Pi, Ni = P[interior], grid.index(i[interior] + 1, j[interior])
     Li = length[interior]
-    add(Pi, Ni, Ni, Pi, -Li / dr)
-    add(Pi, Ni, Pi, Pi, Li / dr)
+    add(Pi, Ni, Ni, Pi, -Li / gap[interior])
+    add(Pi, Ni, Pi, Pi, Li / gap[interior])
     ii, jj = i[interior], j[interior]
     wt = -Li / (4.0 * dth * rf[interior])
     for di in (0, 1):
@@ -233,18 +234,17 @@ def _operator_entries(grid: PolarGrid):
         add(Pi, Ni, grid.index(ii + di, jj - 1), Pi + N, -wt)
     edge = ~interior
     Pe = P[edge]
-    add(Pe, None, Pe, Pe, length[edge] / (0.5 * dr))
+    add(Pe, None, Pe, Pe, length[edge] / gap[edge])
 
     # ---- angular faces (counter-clockwise face of each cell): c[2N:3N] = D_tt, c[3N:4N] = D_tr
-    La = np.full(P.shape, dr)
+    La = np.broadcast_to(grid.widths, P.shape)
     Nb = grid.index(i, j + 1)
-    r_c = (i + 0.5) * dr
+    r_c = np.broadcast_to(grid.r, P.shape)
     add(P, Nb, Nb, P + 2 * N, -La / (r_c * dth))
     add(P, Nb, P, P + 2 * N, La / (r_c * dth))
-    (ca, wa), (cb, wb) = grid.radial_derivative_stencil
     for jj_shift in (0, 1):
         sel = np.roll(np.arange(n_t), -jj_shift)  # cell (i, j + shift)
-        for c_arr, w_arr in ((ca, wa), (cb, wb)):
+        for c_arr, w_arr in grid.radial_derivative_stencil:
             add(P, Nb, c_arr[:, sel], P + 3 * N, -0.5 * w_arr[:, sel] * La)
     return (np.concatenate(rows), np.concatenate(cols), np.concatenate(src), np.concatenate(wts))
 
@@ -326,13 +326,13 @@ def face_fluxes(grid: PolarGrid, coeffs: FaceCoefficients) -> tuple[np.ndarray, 
     # integral of the outward normal over the arc r = r_f, |theta - theta_j| < dtheta/2 is
     # 2 r_f sin(dtheta/2) e_r(theta_j): with it the normals of a cell sum exactly to zero, so
     # a uniform flux field has exactly zero divergence (free-stream preservation)
-    rf = (np.arange(grid.n_r) + 1.0)[:, None] * grid.dr
+    rf = grid.ring_faces[1:, None]
     lr = 2.0 * rf * np.sin(0.5 * grid.dtheta)
     c, s = np.cos(grid.theta), np.sin(grid.theta)
     fr = (qx * c + qy * s) * lr  # outward through the outer face of (i, j)
     qx, qy = coeffs.angular[3:5]
     tf = (np.arange(n_t) + 1.0)[None, :] * grid.dtheta
-    fa = (-qx * np.sin(tf) + qy * np.cos(tf)) * grid.dr  # through the ccw face of (i, j)
+    fa = (-qx * np.sin(tf) + qy * np.cos(tf)) * grid.widths  # through the ccw face of (i, j)
     return fr, fa
 
 
@@ -346,12 +346,9 @@ def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
 
 
 def factorize(A: sp.spmatrix):
-    """Default sparse direct solver: SuperLU factorisation of A (CSC), with ``.solve(b)``.
-
-    The operator's sparsity pattern is symmetric, so a minimum-degree ordering of A^T + A
-    fills in least (3x faster than the default COLAMD on the default grid).
-    """
-    return spla.splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A")
+    """Default sparse direct solver, :func:`cmpsim.sparse.factorize` (SuperLU keeping the
+    minimum-degree ordering, residual-guarded; ``docs/model.md``, "Sparse factorisation")."""
+    return guarded_factorize(A)
 
 
 class LinearSolveStats:

@@ -93,8 +93,7 @@ def physical_setup(config: Config) -> PhysicalSetup:
         viscosity=c.newtonian_viscosity,
     )
     p0 = float(granular_pressure(c.grain_bulk_density, c.diameter_gap_ratio, v, t=HAFF_T))
-    n_r, n_t = c.grid_shape
-    grid = PolarGrid(0.5 * c.wafer_diameter, n_r, n_t)
+    grid = c.polar_grid()
     pad_model = models.pad_model(config)
     return PhysicalSetup(pad, rough, kin, lub, p0, grid, pad_model.foundation, pad_model, models.removal_law(config))
 

@@ -1,8 +1,9 @@
 """Within-wafer uniformity: rotation-averaged profiles of a polar field, WIWNU and range.
 
 Pure kernels (numpy only) on the cell-centred polar grid of :mod:`cmpsim.grid`: ring i
-covers r_i - dr/2 <= r <= r_i + dr/2 and its cells are centred on the circle of radius
-r_i = (i + 1/2) dr at the equally spaced angles theta_j = (j + 1/2) dtheta.
+covers r_{i-1/2} <= r <= r_{i+1/2} (equally wide rings, or rings graded towards the edge)
+and its cells are centred on the circle of radius r_i = (r_{i-1/2} + r_{i+1/2}) / 2 at the
+equally spaced angles theta_j = (j + 1/2) dtheta.
 
 The wafer turns under the stationary (carrier-frame) pressure field, so a point of the wafer
 at radius r sees, over one turn, every angle of the circle r: what it loses is the angular
@@ -65,15 +66,16 @@ def weighted_range(values, weights) -> float:
     return float(v.max() - v.min())
 
 
-def uniformity(profile, radius: float, edge_exclusion: float) -> tuple[float, float]:
+def uniformity(profile, radius: float, edge_exclusion: float, edges=None) -> tuple[float, float]:
     """(WIWNU, range) of a ring profile on a disk of ``radius`` with an ``edge_exclusion`` (m).
 
-    ``profile`` holds the ring means (:func:`ring_mean`) of equally wide rings. WIWNU is the
-    area-weighted std / mean, the range max - min, both over r <= radius - edge_exclusion.
+    ``profile`` holds the ring means (:func:`ring_mean`) of the rings between ``edges`` (the
+    n_r + 1 face radii, m; default: equally wide rings). WIWNU is the area-weighted
+    std / mean, the range max - min, both over r <= radius - edge_exclusion.
     """
     p = np.asarray(profile, dtype=float)
     limit = radius - edge_exclusion
     if not (0.0 <= edge_exclusion < radius):
         raise ValueError(f"edge_exclusion = {edge_exclusion:g} m leaves no wafer: valid range [0, {radius:g}) m (the wafer radius)")
-    w = ring_areas_inside(ring_edges(radius, p.size), limit)
+    w = ring_areas_inside(ring_edges(radius, p.size) if edges is None else edges, limit)
     return weighted_std_over_mean(p, w), weighted_range(p, w)

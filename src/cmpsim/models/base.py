@@ -50,6 +50,12 @@ class PadModel(Protocol):
     def contact_only_start(self, problem) -> np.ndarray:
         """The cold start: u at zero tilt where the pad contact alone carries the load."""
 
+    def resume_chain(self, problem) -> None:
+        """A warm start continues a chain of points: start from what the last equilibrium left."""
+
+    def end_chain(self, problem) -> None:
+        """Keep what this equilibrium leaves for the next point of a chain."""
+
 
 @runtime_checkable
 class CavitationModel(Protocol):
@@ -126,6 +132,9 @@ class RemovalLaw(Protocol):
     name: str
     #: Names of :data:`cmpsim.models.removal_laws.REMOVAL_FIELDS` passed to :meth:`rate` as keywords.
     needs: tuple
+    #: Whether ``cmpsim.solve`` gives ``removal_rate_relative`` (and solves its reference case)
+    #: unless told (issue 23).
+    relative_by_default: bool
 
     def rate(self, **fields) -> np.ndarray:
         """Local removal rate, m/s."""

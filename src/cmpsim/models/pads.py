@@ -194,6 +194,13 @@ class RigidPad:
             h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * problem.sigma, rtol=1e-12)
         return np.array([h0, 0.0, 0.0])
 
+    # ------------------------------------------------------------------ chains of points
+    def resume_chain(self, problem) -> None:
+        """Nothing to carry: the rigid solve refines against the chain's last LU (:mod:`cmpsim.equilibrium`)."""
+
+    def end_chain(self, problem) -> None:
+        """Nothing to keep beyond the chain's last LU (kept by :mod:`cmpsim.equilibrium`)."""
+
 
 def _contact_root(problem, shape, h_lo: float, h_hi: float, max_iter: int = 30):
     """h0 where the contact load equals the applied load, by Newton's method on its logarithm.
@@ -289,6 +296,12 @@ class WinklerPad(RigidPad):
 
     def contact_only_start(self, problem) -> np.ndarray:
         return compliance.compliant_contact_only_start(problem)
+
+    def resume_chain(self, problem) -> None:
+        compliance.resume_chain(problem)
+
+    def end_chain(self, problem) -> None:
+        compliance.end_chain(problem)
 
 
 class LayerPad(WinklerPad):

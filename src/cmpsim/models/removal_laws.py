@@ -31,6 +31,7 @@ REMOVAL_FIELDS = {
     "relative_speed": "local sliding speed |u_pad - u_wafer|, m/s",
     "contact_area_ratio": "real over nominal contact area of the pad summits A_r/A_n (elastic + elastoplastic + plastic)",
     "film_thickness": "h, m",
+    "contact_spot_density": "summits in contact per unit nominal area N (cmpsim.contact.contact_spot_density), 1/m^2",
 }
 
 
@@ -39,6 +40,8 @@ class PaperRemovalLaw:
 
     name = "paper"
     needs = ("normal_stress", "shear_stress")
+    #: The paper's Figs. 11-12 are in removal rate relative to its reference case.
+    relative_by_default = True
 
     def __init__(self, preston_coefficient: float):
         self.preston_coefficient = preston_coefficient
@@ -57,6 +60,8 @@ class ShearPowerRemovalLaw:
 
     name = "shear_power"
     needs = ("contact_pressure", "fluid_shear_stress", "relative_speed")
+    #: Absolute rates (m/s); the ratio, whose reference solve costs as much as the point, on request.
+    relative_by_default = False
 
     def __init__(self, coefficient: float, friction_coefficient: float, fluid_shear_weight: float):
         self.coefficient = coefficient
@@ -129,7 +134,9 @@ class AbrasiveRemovalLaw:
     with the chemical step in series for ``removal_kinetics = 'two_step'`` (docs/model.md, section 13e)."""
 
     name = "abrasive"
-    needs = ("contact_pressure", "contact_area_ratio", "relative_speed")
+    needs = ("contact_pressure", "contact_area_ratio", "relative_speed", "contact_spot_density")
+    #: Absolute rates (m/s); the ratio, whose reference solve costs as much as the point, on request.
+    relative_by_default = False
 
     def __init__(self, contact: AbrasiveContact, kinetics: TwoStepKinetics | None = None):
         self.contact = contact
@@ -140,11 +147,12 @@ class AbrasiveRemovalLaw:
         kinetics = KINETICS[config.removal_kinetics]
         return cls(abrasive_contact(config), kinetics and kinetics.from_config(config))
 
-    def rate(self, contact_pressure, contact_area_ratio, relative_speed) -> np.ndarray:
-        """Removal rate, m/s (0 without abrasive, with a RuntimeWarning saying so)."""
+    def rate(self, contact_pressure, contact_area_ratio, relative_speed, contact_spot_density=None) -> np.ndarray:
+        """Removal rate, m/s (0 without abrasive, with a RuntimeWarning saying so); particles counted
+        summit by summit when ``contact_spot_density`` (1/m^2) is given, else its continuum limit."""
         if self.contact.volume_fraction == 0:
             warnings.warn("solids_loading = 0: no abrasive particles, so the abrasive removal law removes nothing (removal rate 0)", RuntimeWarning, stacklevel=2)
-        rr = abrasive_removal_rate(contact_pressure, contact_area_ratio, relative_speed, self.contact).rate
+        rr = abrasive_removal_rate(contact_pressure, contact_area_ratio, relative_speed, self.contact, contact_spot_density).rate
         if self.kinetics is not None:
             rr = self.kinetics.rate(rr, contact_pressure, relative_speed)
         return rr
