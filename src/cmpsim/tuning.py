@@ -25,7 +25,7 @@ from scipy.optimize import lsq_linear
 from . import models
 from .config import Config
 from .model import build_problem, solve
-from .uniformity import ring_areas_inside, ring_edges, weighted_std_over_mean
+from .uniformity import ring_areas_inside, weighted_std_over_mean
 from .units import to_si
 
 __all__ = ["ZoneTuning", "tune_zones", "DEFAULT_BOUNDS", "KEEP"]
@@ -56,6 +56,7 @@ class ZoneTuning:
     response: np.ndarray
     config: Config
     solves: int
+    ring_faces: np.ndarray  # radii of the grid's ring faces, m
     history: list = field(default_factory=list)
 
     @property
@@ -68,7 +69,7 @@ class ZoneTuning:
         """
         r = np.asarray(self.profile["radius"])
         edges = np.concatenate([[0.0], self.zone_radii])
-        ring_area = np.diff(np.linspace(0.0, edges[-1], r.size + 1) ** 2)
+        ring_area = np.diff(np.asarray(self.ring_faces) ** 2)
         weight = np.abs(self.response) * ring_area[:, None]
         inside = [(r >= a) & (r < b) for a, b in zip(edges[:-1], edges[1:])]
         return tuple(float(weight[m, k].sum() / weight[:, k].sum()) if weight[:, k].sum() > 0 else float("nan") for k, m in enumerate(inside))
@@ -113,10 +114,8 @@ class _Solver:
 
 
 def _weights(result) -> np.ndarray:
-    c = result.config
-    radius = 0.5 * c.wafer_diameter
-    rates = np.asarray(result.profiles["removal_rate_profile"])
-    return ring_areas_inside(ring_edges(radius, rates.size), radius - c.edge_exclusion)
+    """Area of each ring inside the edge exclusion, m^2 (the weights of the output's non-uniformity)."""
+    return ring_areas_inside(result.grid.ring_faces, result.grid.radius - result.config.edge_exclusion)
 
 
 def _profile(result) -> dict:
@@ -225,6 +224,7 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
         response=response,
         config=final_cfg,
         solves=run.solves,
+        ring_faces=np.asarray(base.grid.ring_faces, dtype=float),
         history=history,
     )
 
