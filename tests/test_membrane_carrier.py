@@ -113,3 +113,7 @@ def test_the_result_carries_the_wafer_bending_as_a_field_and_a_profile(zoned, ri
     assert np.max(np.abs(zoned.polar["wafer_bending"] - w)) < 1e-6 * np.max(np.abs(w))
     assert zoned.profiles["wafer_bending_profile"] == pytest.approx(w.mean(axis=1), rel=1e-6, abs=1e-6 * np.max(np.abs(w)))
     assert not np.any(rigid.polar["wafer_bending"]) and zoned.to_dict()["units"]["wafer_bending"] == "m"
+
+
+def test_the_iterations_count_every_newton_step_of_the_bending(zoned):
+    assert zoned.scalars["iterations"] >= zoned.problem.carrier.bending_solves

@@ -197,11 +197,12 @@ class MembraneCarrier(RigidCarrier):
         step = 1e-3 * problem.sigma
         shifted = problem.state(st.u + np.array([step, 0.0, 0.0]))
         stiffness = -(grid.integrate(shifted.p_total) - grid.integrate(st.p_total)) / (step * grid.integrate(np.ones_like(st.h)))
-        last = {"sol": sol}
+        last = {"sol": sol, "iterations": sol.iterations}
 
         def equilibrium(w):
             self.bending = (grid, np.array(w, dtype=float, copy=True))
             last["sol"] = solve(problem, start=last["sol"].state.u, **options)
+            last["iterations"] += last["sol"].iterations
             return last["sol"].state
 
         tol = 1e3 * options.get("tol", 1e-9) * problem.sigma
@@ -218,4 +219,5 @@ class MembraneCarrier(RigidCarrier):
             raise EquilibriumError(f"membrane carrier: {exc}") from exc
         self.bending = (grid, w)
         self.bending_solves = solves
+        last["sol"].iterations = last["iterations"]  # Newton steps of every rigid-body solve of the bending
         return last["sol"]
