@@ -128,6 +128,7 @@ def test_every_option_value_has_a_class_behind_its_protocol():
     for cav in models.CAVITATION_MODELS:
         assert isinstance(models.slurry_model("newtonian", cav, -1e4, 3e4), models.SlurryModel)
     assert isinstance(models.carrier("rigid"), models.CarrierModel)
+    assert isinstance(models.carrier(cfg.replace(carrier="membrane")), models.CarrierModel)
 
 
 def test_the_registry_refuses_unknown_names_and_inapplicable_cavitation():
@@ -135,7 +136,9 @@ def test_the_registry_refuses_unknown_names_and_inapplicable_cavitation():
 
     from cmpsim import models
 
-    with pytest.raises(ValueError, match=r"carrier must be one of \('rigid',\); got 'membrane'"):
+    with pytest.raises(ValueError, match=r"carrier must be one of \('rigid', 'membrane'\); got 'gimbal'"):
+        models.carrier("gimbal")
+    with pytest.raises(ValueError, match=r"carrier 'membrane' needs its inputs"):
         models.carrier("membrane")
     with pytest.raises(ValueError, match="applies to the Newtonian slurry only"):
         models.slurry_model("granular", "gumbel", -1e4, 3e4)

@@ -34,7 +34,7 @@ SOLVER = ["converged", "iterations", "factorizations", "load_residual", "moment_
 FIELDS = [
     "film_thickness", "slurry_pressure", "granular_pressure", "contact_pressure", "total_pressure",
     "contact_area_ratio_elastic", "contact_area_ratio_elastoplastic", "contact_area_ratio_plastic",
-    "normal_stress", "shear_stress", "removal_rate", "pad_deflection",
+    "normal_stress", "shear_stress", "removal_rate", "pad_deflection", "wafer_bending",
 ]
 OPTIONAL_FIELDS = ["fill_fraction"]
 #: The paper's model (cmpsim 0.1): the 0.1 object and the base-case profile below are its results.
@@ -53,7 +53,7 @@ def test_registry_holds_exactly_the_contract_names_in_si_without_units_in_names(
     assert outputs.value_names() == VALUES
     assert outputs.diagnostic_names() == SOLVER + ["moment_roots_found"]
     assert outputs.field_names() == FIELDS + OPTIONAL_FIELDS
-    assert outputs.profile_names() == ["removal_rate_profile", "film_thickness_profile"]
+    assert outputs.profile_names() == ["removal_rate_profile", "film_thickness_profile", "wafer_bending_profile"]
     for o in outputs.OUTPUTS.values():
         assert o.unit in CF_UNITS, o.name
         assert not re.search(r"_(m|rad|pa|um|nm|m_s|nm_per_min|per_min|kpa|psi)$", o.name), o.name
@@ -117,9 +117,9 @@ def test_to_dict_is_the_schema_2_object(base):
     d = base.to_dict()
     assert set(d) == TOP_KEYS and d["schema"] == 2 and d["cmpsim_version"] == cmpsim.__version__
     assert d["inputs"] == base.config.to_dict()
-    assert set(d["units"]) == set(d["values"]) | set(d["solver"]) | {"radius", "removal_rate", "film_thickness"}
+    assert set(d["units"]) == set(d["values"]) | set(d["solver"]) | {"radius", "removal_rate", "film_thickness", "wafer_bending"}
     assert d["units"]["removal_rate_mean"] == "m s-1" and d["units"]["attack_angle"] == "rad" and d["units"]["radius"] == "m"
-    assert set(d["profiles"]) == {"radius", "removal_rate", "film_thickness"}
+    assert set(d["profiles"]) == {"radius", "removal_rate", "film_thickness", "wafer_bending"}
     assert len(d["profiles"]["radius"]) == base.grid.n_r == len(d["profiles"]["removal_rate"])
     assert json.loads(base.to_json()) == json.loads(json.dumps(d))
 

@@ -507,3 +507,15 @@ def test_the_web_form_offers_the_abrasive_inputs_with_units_and_choices(client):
     assert by_name["film"]["choices"] == ["oxide", "copper", "tungsten"]
     assert by_name["removal_kinetics"]["choices"] == ["mechanical", "two_step"]
     assert "abrasive" in by_name["removal_law"]["choices"] and by_name["removal_law"]["default_display"] == "abrasive"
+
+
+def test_tune_zones_answers_the_object_of_the_command(client):
+    body = {"carrier": "membrane", "zone_radii": "20,38.1 mm", "grid": "8x24"}
+    r = client.post("/api/tune-zones", json=body)
+    assert r.status_code == 200, r.text
+    data = r.json()
+    cli = json.loads(CliRunner().invoke(main, ["tune-zones", "--json", "--grid", "8x24", "--set", "carrier=membrane", "--set", "zone_radii=20,38.1 mm"]).output)
+    assert data["zone_pressures"] == pytest.approx(cli["zone_pressures"], rel=1e-9)
+    assert data["within_wafer_nonuniformity"] == pytest.approx(cli["within_wafer_nonuniformity"], rel=1e-6)
+    bad = client.post("/api/tune-zones", json={"grid": "8x24"})
+    assert bad.status_code == 422 and "tune_zones needs carrier = 'membrane'" in bad.text

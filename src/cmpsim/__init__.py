@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 
-__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "EquilibriumError", "__version__"]
+__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "tune_zones", "EquilibriumError", "__version__"]
 
 _LAZY = {
     "Config": ("cmpsim.config", "Config"),
@@ -31,6 +31,7 @@ _LAZY = {
     "reproduce": ("cmpsim.reproduction", "reproduce"),
     "validate": ("cmpsim.validation", "validate"),
     "calibrate": ("cmpsim.calibration", "calibrate"),
+    "tune_zones": ("cmpsim.tuning", "tune_zones"),
     "die": ("cmpsim.die", None),  # the chip-scale model, a package: cmpsim.die.simulate(...)
 }
 

@@ -207,7 +207,7 @@ def params(markdown):
     rows, detail = [], []
     for n, p in PARAMETERS.items():
         unit = p.display if p.unit not in ("choice", "grid") else ""
-        default = format_display(n, p.default) + (f" {unit}" if unit else "")
+        default = format_display(n, p.default) + (f" {unit}" if unit else "") if p.default != () else "unset"
         # narrow terminals: the default above its valid range, both in the display unit
         rows.append((n, default, p.display_range_text()) if console.width >= WIDE else (n, f"{default}\n{p.display_range_text()}"))
         detail.append(f"{p.description}. Source: {p.source}")
@@ -433,6 +433,58 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
 
 
 # ---- serve command (web/) ----
+@main.command(name="tune-zones")
+@config_options
+@click.option("--bounds", default="0.5,8 psi", show_default=True, metavar="LOW,HIGH UNIT", help="Bounds of every zone pressure.")
+@click.option("--keep", type=click.Choice(["pressure", "rate"]), default=None, help="Also keep the mean pressure (the load) or the mean removal rate of the start.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before.")
+def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, as_json):
+    """Find the zone pressures of a membrane head that flatten the removal profile.
+
+    Starts from the configuration's zone_pressures (or applied_pressure in every zone);
+    needs --set carrier=membrane and zone_radii. Prints the pressures, the profile before
+    and after, and the within-wafer non-uniformity.
+    """
+    import json
+
+    from .equilibrium import EquilibriumError
+    from .tuning import tune_zones
+    from .units import parse_list
+
+    try:
+        cfg = load_config(config_path, assignments, preset, grid)
+        limits = parse_list(bounds, "Pa", "--bounds", example="psi")
+        if len(limits) != 2:
+            raise ValueError(f"--bounds takes two pressures, LOW,HIGH with one unit (e.g. '0.5,8 psi'); got {bounds!r}")
+        result = tune_zones(cfg, bounds=limits, keep=keep)
+    except EquilibriumError as exc:
+        _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
+    except ValueError as exc:
+        _fail(str(exc))
+    if as_json:
+        click.echo(json.dumps(result.to_dict()))
+        return
+    psi = 6894.757293168361
+    rows = [
+        (f"{1e3 * r:.1f}", f"{p0 / psi:.3f}", f"{p1 / psi:.3f}")
+        for r, p0, p1 in zip(result.zone_radii, result.before["zone_pressures"], result.zone_pressures)
+    ]
+    from rich.console import Console
+
+    console = Console()
+    console.print(_rich_table("zone pressures", ["zone outer radius (mm)", "before (psi)", "tuned (psi)"], rows))
+    nm_min = 1e9 * 60.0
+    prof = [
+        (f"{1e3 * r:.2f}", f"{nm_min * a:.3f}", f"{nm_min * b:.3f}")
+        for r, a, b in zip(result.profile["radius"], result.before["profile"]["rate"], result.profile["rate"])
+    ]
+    console.print(_rich_table("removal-rate profile", ["radius (mm)", "before (nm/min)", "tuned (nm/min)"], prof))
+    console.print(
+        f"within-wafer non-uniformity: {100 * result.before['within_wafer_nonuniformity']:.3f} % -> "
+        f"{100 * result.within_wafer_nonuniformity:.3f} % ({result.solves} operating points solved)"
+    )
+
+
 @main.command(name="serve")
 @click.option("--host", default="127.0.0.1", show_default=True, help="Address to listen on; anything but loopback warns (then use --token).")
 @click.option("--port", type=click.IntRange(1, 65535), default=8000, show_default=True, help="Port to listen on.")

@@ -31,6 +31,7 @@ __all__ = [
     "parse_value",
     "parameter",
     "parameter_table_markdown",
+    "zone_mean_pressure",
     "GRID_PRESETS",
     "GRID_EDGE",
     "PRESETS",
@@ -63,9 +64,12 @@ class Param:
     low_open: bool = True
     high_open: bool = True
     choices: tuple[str, ...] = ()
+    items: bool = False  # a list input: comma-separated numbers and one unit; stored as a tuple of SI floats
 
     def range_text(self) -> str:
         """Human-readable valid range, in SI."""
+        if self.items:
+            return "a list of numbers, each in " + dataclasses.replace(self, items=False).range_text()
         if self.choices:
             return "one of " + ", ".join(repr(c) for c in self.choices)
         if self.unit == "grid":
@@ -86,10 +90,15 @@ class Param:
             return text
         if self.unit == "grid":
             return _parse_grid(value)
+        if self.items:  # each value in the range of one item
+            item = dataclasses.replace(self, items=False)
+            return tuple(_check_range(item, v) for v in value)
         return _check_range(self, value)
 
     def display_range_text(self) -> str:
         """Human-readable valid range, in the display unit (``cmpsim params``)."""
+        if self.items:
+            return "a list of numbers, each in " + dataclasses.replace(self, items=False).display_range_text()
         if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
             return self.range_text()
         lo = "-inf" if self.low is None else f"{units.to_display(self, self.low):.6g}"
@@ -110,16 +119,22 @@ PARAMETERS: dict[str, Param] = {
         # ---------------------------------------------------------------- wafer
         _P("wafer_diameter", "wafer", "2 R_w", "m", "in", 0.0762, "Wafer diameter", "Paper Table 1 (3 in)", 0.0),
         _P("dome_height", "wafer", "delta_d", "m", "um", 5e-6, "Dome height of the convex wafer (0 = flat)", "Paper Table 1", 0.0, None, False),
+        _P("wafer_thickness", "wafer", "t_w", "m", "um", 381e-6, "Thickness of the wafer: its bending stiffness D = E t^3 / 12(1 - nu^2) on a membrane carrier (carrier = 'membrane')", "SEMI M1 (polished silicon wafers): 381 um for 76.2 mm (3 in) wafers; 725 um for 200 mm, 775 um for 300 mm", 0.0),
         _P("edge_exclusion", "wafer", "EE", "m", "mm", 3e-3, "Metrology edge exclusion: the outer annulus left out of the within-wafer uniformity (also < wafer_diameter / 2)", "Wafer metrology convention: flatness and thickness are specified over a fixed quality area inside a nominal edge exclusion, 3 mm for 100-200 mm wafers (SEMI M1; SEMI MF1530), 2 mm and less for 300 mm (ITRS); see docs/model.md ('Within-wafer uniformity')", 0.0, None, False),
         _P("film", "wafer", "-", "choice", "", "oxide", "Film being polished (its modulus, Poisson ratio and hardness enter the abrasive removal law)", "cmpsim.materials.FILMS (each entry with its source); docs/model.md ('Abrasive removal')", choices=tuple(FILMS)),
         # ---------------------------------------------------------------- process
         _P("applied_pressure", "process", "P", "Pa", "psi", 4 * 6894.757293168361, "Applied load over wafer area", "Paper Table 1 (4 psi; range 2-6 psi)", 0.0),
+        _P("carrier", "process", "-", "choice", "", "rigid", "Wafer carrier: a rigid wafer held at a pivot at the centre of its face under one uniform applied pressure (the paper), or a multi-zone membrane pressing a wafer that bends as a free elastic plate", "Paper eq. 30-31 (rigid); docs/model.md ('Force and moment balance', 'Carrier')", choices=("rigid", "membrane")),
+        _P("zone_radii", "process", "R_k", "m", "mm", (), "Outer radius of each pressure zone of the membrane, increasing, the last at the wafer rim; unset = one zone over the whole wafer", "Head geometry of the user's tool; five-zone 300 mm heads: docs/model.md ('Carrier')", 0.0, items=True),
+        _P("zone_pressures", "process", "P_k", "Pa", "psi", (), "Membrane pressure of each zone (one per zone_radii); unset = applied_pressure in every zone. When set, applied_pressure is their area-weighted mean", "The user's recipe (production membrane heads run zones at about 1-8 psi); unset reproduces the uniform load", 0.0, items=True),
+        _P("retaining_ring_gap", "process", "g_r", "m", "mm", 1e-3, "Radial gap between the wafer edge and the inner edge of the retaining ring", "Assumption [A]: a ring must hold the wafer with a small clearance; about 1 mm (ring inner diameter ~302 mm for 300 mm wafers). See docs/model.md ('Carrier')", 0.0, None, False),
+        _P("retaining_ring_width", "process", "w_r", "m", "mm", 20e-3, "Radial width of the retaining ring's face on the pad", "Assumption [A]: of the order of 20 mm; see docs/model.md ('Carrier')", 0.0),
+        _P("retaining_ring_pressure", "process", "P_r", "Pa", "psi", 0.0, "Pressure of the retaining ring's face on the pad (0 = no ring)", "0 = no ring, the paper's head; acts through the laterally coupled pad (pad_compliance = 'layer') only: docs/model.md ('Carrier')", 0.0, None, False),
         _P("rotation_speed", "process", "Omega_p", "rad/s", "rpm", 2 * math.pi, "Pad (relative) rotation speed", "Paper Table 1 (60 rpm; range 30-90 rpm)", 0.0),
         _P("wafer_speed_ratio", "process", "Omega_w/Omega_p", "", "", 1.0, "Wafer over pad rotation speed (1 = uniform relative velocity)", "Assumption: the paper quotes one relative rotation speed; equal speeds as in Thakurta et al. 2001 (60/60 rpm)", 0.0),
         _P("centre_distance", "process", "e", "m", "m", 0.1, "Pad-centre to wafer-centre distance", "Not in the paper; assumed so that 60 rpm gives 0.63 m/s, inside the 0.3-1.75 m/s of CMP practice (Mariscal et al. 2020). See docs/model.md", 0.0),
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
-        _P("carrier", "process", "-", "choice", "", "rigid", "Wafer carrier: a rigid wafer held at a pivot at the centre of its face, under a uniform applied pressure (the paper)", "Paper eq. 30-31; docs/model.md ('Force and moment balance')", choices=("rigid",)),
         _P("removal_law", "process", "-", "choice", "", "abrasive", "Removal law: the paper's RR = K sigma_n tau; the shear-power law RR = k_s (mu p_c + chi tau_f) |du|; or abrasive particles trapped in the real contact ploughing the film", "docs/model.md ('Removal rate', 'Abrasive removal'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023); Luo & Dornfeld, IEEE Trans. Semicond. Manuf. 14, 112 (2001)", choices=("paper", "shear_power", "abrasive")),
         _P("abrasion_efficiency", "process", "k_a", "", "", 0.1, "Share of the groove ploughed by a trapped particle that leaves as debris (abrasive removal law)", "Three-body abrasion (particles free between two surfaces) wears about ten times less than two-body abrasion, which cuts the whole groove (Rabinowicz, Dunn & Russell, Wear 4, 345 (1961)); scale of the law, see docs/model.md ('Abrasive removal')", 0.0, 1.0, False, False),
         _P("removal_kinetics", "process", "-", "choice", "", "mechanical", "Removal kinetics: the mechanical removal alone, or a thermally activated chemical step in series with it (two-step, flash heating)", "docs/model.md ('Two-step kinetics'); Sorooshian, Philipossian, Borucki et al. (2004-2006); Mariscal et al., ECS J. Solid State Sci. Technol. 9, 044008 (2020)", choices=("mechanical", "two_step")),
@@ -294,6 +309,66 @@ def _loading_overrides(current: "Config", given: dict[str, Any]) -> dict[str, An
     return out
 
 
+#: Relative tolerance of "the last zone radius is the wafer radius" and of "applied_pressure is
+#: the zones' mean" (inputs typed in mm or psi carry round-off of ~1e-16 after conversion).
+_MATCH_RTOL = 1e-9
+
+
+def _check_carrier(c: "Config") -> None:
+    """Refuse zone and ring inputs that the chosen carrier and pad cannot honour, naming the parameters."""
+    p = c.process
+    if c.process.carrier != "membrane" and (p.zone_radii or p.zone_pressures):
+        name = "zone_pressures" if p.zone_pressures else "zone_radii"
+        raise ValueError(f"{name} needs carrier = 'membrane' (got carrier = {p.carrier!r}): a rigid carrier presses with applied_pressure alone")
+    if p.carrier == "membrane" and c.pad.pad_compliance == "rigid":
+        raise ValueError(
+            "carrier = 'membrane' needs a compliant pad: pad_compliance must be 'winkler' or 'layer' (got 'rigid'); "
+            "on a rigid pad the thin wafer's bending over the slurry film has no converged solution in cmpsim (docs/limitations.md)"
+        )
+    radius = 0.5 * c.wafer.wafer_diameter
+    radii = p.zone_radii
+    if radii:
+        if any(b <= a for a, b in zip(radii, radii[1:])):
+            raise ValueError(f"zone_radii must increase from the centre outwards; got {', '.join(f'{r:g}' for r in radii)} m")
+        if not math.isclose(radii[-1], radius, rel_tol=_MATCH_RTOL):
+            raise ValueError(
+                f"zone_radii: the last zone must end at the wafer rim, {radius:g} m (wafer_diameter / 2); got {radii[-1]:g} m. "
+                f"Valid: increasing radii in (0, {radius:g}] m, the last = {radius:g} m"
+            )
+    n_zones = len(radii) or 1
+    if p.zone_pressures and len(p.zone_pressures) != n_zones:
+        raise ValueError(
+            f"zone_pressures has {len(p.zone_pressures)} values but there are {n_zones} zones "
+            f"({'zone_radii = ' + ', '.join(f'{r:g}' for r in radii) + ' m' if radii else 'zone_radii unset: one zone'}); give one pressure per zone"
+        )
+    if p.retaining_ring_pressure > 0 and c.pad.pad_compliance != "layer":
+        raise ValueError(
+            f"retaining_ring_pressure = {p.retaining_ring_pressure:g} Pa cannot act on the wafer with pad_compliance = "
+            f"{c.pad.pad_compliance!r}: a local pad carries the ring's load where it presses, not under the wafer. "
+            "Set retaining_ring_pressure = 0, or use pad_compliance = 'layer' (the laterally coupled pad)"
+        )
+
+
+def zone_mean_pressure(radii, pressures) -> float:
+    """Area-weighted mean of zone pressures, Pa: sum P_k pi (R_k^2 - R_{k-1}^2) / (pi R_n^2), R_0 = 0 (radii in m)."""
+    edges = (0.0,) + tuple(radii)
+    areas = [b * b - a * a for a, b in zip(edges, edges[1:])]
+    return math.fsum(pk * ak for pk, ak in zip(pressures, areas)) / (edges[-1] ** 2)
+
+
+def _with_zone_load(c: "Config", overrides: dict) -> "Config":
+    """``c`` with applied_pressure set to the zones' mean; refuses an input that sets both to different loads."""
+    mean = zone_mean_pressure(c.zone_outer_radii, c.process.zone_pressures)
+    given = c.process.applied_pressure
+    if "applied_pressure" in overrides and not math.isclose(given, mean, rel_tol=_MATCH_RTOL):
+        where = "the same input sets zone_pressures" if "zone_pressures" in overrides else "zone_pressures are already set"
+        raise ValueError(
+            f"applied_pressure = {given:g} Pa conflicts with zone_pressures ({where}; their area-weighted mean is {mean:g} Pa): set one of them. "
+            "With zone_pressures, applied_pressure is their mean; to go back to one pressure everywhere set zone_pressures = ''"
+        )
+    return Config(**{s: getattr(c, s) for s in _SECTIONS if s != "process"}, process=dataclasses.replace(c.process, applied_pressure=mean))
+
+
 def _parse_grid(value: Any) -> str:
     s = str(value).strip().lower().replace(" ", "")
     if s in GRID_PRESETS:
@@ -394,8 +469,21 @@ class Config:
         for name, v in parsed.items():
             groups.setdefault(PARAMETERS[name].section, {})[name] = v
         new = Config(**{s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS})
+        _check_carrier(new)
+        if new.process.zone_pressures:
+            new = _with_zone_load(new, overrides)
         _check_consistency(new)
         return new
+
+    @property
+    def zone_outer_radii(self) -> tuple[float, ...]:
+        """Outer radius of each membrane zone, m: ``zone_radii``, or the wafer radius alone when unset."""
+        return self.process.zone_radii or (0.5 * self.wafer.wafer_diameter,)
+
+    @property
+    def zone_pressure_values(self) -> tuple[float, ...]:
+        """Membrane pressure of each zone, Pa: ``zone_pressures``, or ``applied_pressure`` in every zone when unset."""
+        return self.process.zone_pressures or (self.process.applied_pressure,) * len(self.zone_outer_radii)
 
     def to_dict(self) -> dict[str, Any]:
         """Flat {name: SI value} of every input."""
@@ -519,8 +607,11 @@ def parameter_table_markdown() -> str:
         "|---|---|---|---|---|---|---|",
     ]
     for n, p in PARAMETERS.items():
-        d = p.default if isinstance(p.default, str) else f"{p.default:.6g}"
-        shown = format_display(n, p.default) + (f" {p.display}" if p.display and p.display not in ("", p.unit) else "")
+        if p.items:  # list inputs have no default list: unset
+            d = shown = "unset"
+        else:
+            d = p.default if isinstance(p.default, str) else f"{p.default:.6g}"
+            shown = format_display(n, p.default) + (f" {p.display}" if p.display and p.display not in ("", p.unit) else "")
         unit = p.unit if p.unit not in ("choice", "grid", "") else "-"
         lines.append(f"| `{n}` | {p.symbol} | {unit} | {d} | {shown} | {p.range_text()} | {p.source} |")
     return "\n".join(lines) + "\n"

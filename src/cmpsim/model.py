@@ -26,7 +26,7 @@ def reference_config(config: Config) -> Config:
     """The reference case of ``config``: the LEP model at :data:`REFERENCE_CASE` with the pad at its
     ``reference_roughness``, every other input equal (the paper's d = 100 nm, sigma = 15 um, 4 psi,
     60 rpm in the paper preset)."""
-    return config.replace(model="lep", pad_roughness=config.reference_roughness, **REFERENCE_CASE)
+    return config.replace(model="lep", pad_roughness=config.reference_roughness, zone_pressures="", **REFERENCE_CASE)
 
 
 def wants_relative(config: Config) -> bool:
@@ -103,7 +103,7 @@ def solve(
     setup = physical_setup(config)
     if problem is None:
         problem = build_problem(config, setup)
-    sol = solve_equilibrium(problem, start=start, tol=config.tolerance, max_iter=config.max_iterations)
+    sol = problem.carrier.equilibrium(problem, solve_equilibrium, start=start, tol=config.tolerance, max_iter=config.max_iterations)
     scalars, polar, profiles = evaluate_outputs(config, setup, problem, sol)
     if relative is None:
         relative = wants_relative(config)

@@ -162,11 +162,13 @@ _OUTPUT_LIST = [
     _O("shear_stress", "field", "Pa", "shear stress magnitude tau on the wafer", "kPa", 1e-3, "field"),
     _O("removal_rate", "field", "m s-1", "local removal rate", "nm/min", 6e10, "field"),
     _O("pad_deflection", "field", "m", "bulk deflection w of the pad stack under the total pressure (0 on a rigid pad)", "um", 1e6, "field"),
+    _O("wafer_bending", "field", "m", "bending w of the wafer away from the pad on a membrane carrier (0 on the rigid carrier; cmpsim.plate)", "um", 1e6, "field"),
     _O("fill_fraction", "field", "1", "fill fraction of the film (JFO cavitation of a Newtonian slurry; 1 = full film)", "%", 100.0, "field", optional=True),
     # ------------------------------------------------------------------ profiles (rotation averages)
     _O("radius", "coordinate", "m", "wafer radius of the ring centres, r_i = (i + 1/2) R_w / n_r", "mm", 1e3, "field"),
     _O("removal_rate_profile", "profile", "m s-1", "rotation-averaged removal rate: mean of the fixed-frame removal-rate map along the circle of radius r", "nm/min", 6e10, "ring_mean", ("removal_rate",)),
     _O("film_thickness_profile", "profile", "m", "rotation-averaged film thickness: mean of the film thickness along the circle of radius r", "um", 1e6, "ring_mean", ("film_thickness",)),
+    _O("wafer_bending_profile", "profile", "m", "rotation-averaged bending of the wafer (membrane carrier; 0 on the rigid carrier)", "um", 1e6, "ring_mean", ("wafer_bending",)),
 ]
 _FIELD_NAMES = frozenset(o.name for o in _OUTPUT_LIST if o.kind == "field")
 
@@ -333,6 +335,8 @@ def json_schema() -> dict:
     for n, p in PARAMETERS.items():
         if p.choices or p.unit == "grid":
             inputs[n] = {"type": "string", "description": p.description}
+        elif p.items:
+            inputs[n] = {"type": "array", "items": {"type": "number"}, "description": f"{p.description} [{p.unit}]"}
         else:
             unit = p.unit or "1"
             inputs[n] = {"type": "integer" if isinstance(p.default, int) else "number", "description": f"{p.description} [{unit}]"}

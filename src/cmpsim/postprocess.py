@@ -76,6 +76,8 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "removal_rate": rr,
         # bulk deflection of the pad stack (0 on a rigid pad; compliance.py)
         "pad_deflection": st.deflection if st.deflection is not None else np.zeros_like(st.h),
+        # bending of the wafer on a membrane carrier (0 on the rigid carrier; cmpsim.plate)
+        "wafer_bending": problem.carrier.bending_field(problem),
     }
     if st.fill_fraction is not None:
         polar["fill_fraction"] = st.fill_fraction

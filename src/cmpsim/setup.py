@@ -115,5 +115,5 @@ def build_problem(config: Config, setup: PhysicalSetup | None = None) -> WaferPr
         foundation=s.foundation,
         pad_model=s.pad_model,
         slurry=models.slurry_model(config.slurry_model, config.cavitation, config.cavitation_pressure, s.ambient_pressure),
-        carrier=models.carrier(config.carrier),
+        carrier=models.carrier(config),
     )

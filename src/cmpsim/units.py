@@ -23,7 +23,7 @@ from __future__ import annotations
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["registry", "parse", "to_display", "format_display", "to_si", "convert", "unit_text"]
+__all__ = ["registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
 ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
@@ -97,9 +97,44 @@ def parse(param, value: Any) -> Any:
     Raises ``ValueError`` naming the parameter and its valid range.
     """
     p = _entry(param)
+    if getattr(p, "items", False):
+        return p.check(parse_list(value, p.unit, p.name, example=p.display))
     if p.choices or p.unit == "grid" or (isinstance(value, (int, float)) and not isinstance(value, bool)):
         return p.check(value)
     return p.check(to_si(value, p.unit, p.name, example=p.display))
+
+
+def parse_list(value: Any, unit: str, name: str = "value", example: str | None = None) -> tuple[float, ...]:
+    """A list input as a tuple of floats in ``unit`` (SI); no range check.
+
+    ``value`` is a string of comma-separated numbers and one unit after the last
+    (``"3, 3, 3.5, 4, 2 psi"``; an item may carry its own unit: ``"50 mm, 0.1 m"``), an empty
+    string for no items, or a sequence of numbers (taken as SI) or strings with units.
+    Raises ``ValueError`` naming ``name`` when an item is not a quantity of the right dimension.
+    """
+    if isinstance(value, str):
+        text = value.strip()
+        if not text:
+            return ()
+        pieces = [q.strip() for q in text.split(",")]
+        if any(not q for q in pieces):
+            raise ValueError(f"{name}: {value!r} has an empty item; expected comma-separated numbers and one unit, e.g. '3, 3.5, 4 {example or unit}'")
+        last = pieces[-1]
+        number = last.split()[0] if last.split() else last
+        trailing = last[len(number):].strip() if _is_number(number) else ""
+        items = [q + (" " + trailing if trailing and _is_number(q) else "") for q in pieces[:-1]] + [last]
+        return tuple(to_si(q if not _is_number(q) else float(q), unit, name, example) for q in items)
+    if isinstance(value, (list, tuple)):
+        return tuple(to_si(v, unit, name, example) for v in value)
+    raise ValueError(f"{name} must be a list: comma-separated numbers and one unit (e.g. '3, 3.5, 4 {example or unit}'); got {value!r}")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def to_display(param, value: Any) -> Any:
@@ -107,10 +142,14 @@ def to_display(param, value: Any) -> Any:
     p = _entry(param)
     if isinstance(value, str) or not p.display or p.display == p.unit:
         return value
+    if isinstance(value, (list, tuple)):
+        return tuple(float(registry().Quantity(v, p.unit).to(p.display).magnitude) for v in value)
     return registry().Quantity(value, p.unit).to(p.display).magnitude
 
 
 def format_display(param, value: Any) -> str:
     """SI value of the input described by ``param`` (a registry entry) as display text (6 significant digits)."""
     v = to_display(param, value)
+    if isinstance(v, tuple):  # a list input: "3, 3.5, 4" ("" when unset)
+        return ", ".join(f"{x:.6g}" for x in v)
     return v if isinstance(v, str) else f"{v:.6g}"

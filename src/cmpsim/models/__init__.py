@@ -10,7 +10,7 @@ input                     values -> class                                  proto
 ``slurry_model``          :data:`SLURRY_MODELS` (granular, newtonian)      :class:`~cmpsim.models.base.SlurryModel`
 ``cavitation``            :data:`CAVITATION_MODELS` (none, gumbel, jfo)    :class:`~cmpsim.models.base.CavitationModel`
 ``removal_law``           :data:`REMOVAL_LAWS` (paper, ..., abrasive)      :class:`~cmpsim.models.base.RemovalLaw`
-``carrier``               :data:`CARRIERS` (rigid)                         :class:`~cmpsim.models.base.CarrierModel`
+``carrier``               :data:`CARRIERS` (rigid, membrane)               :class:`~cmpsim.models.base.CarrierModel`
 ========================  ==============================================  =====================================
 
 :mod:`cmpsim.setup` builds the models of a Config with the functions below; the solver and
@@ -23,7 +23,7 @@ import numpy as np
 
 from ..cavitation import VACUUM_GAUGE_PRESSURE
 from .base import CarrierModel, CavitationModel, PadModel, RemovalLaw, SlurryModel
-from .carriers import RigidCarrier
+from .carriers import MembraneCarrier, RigidCarrier
 from .pads import LayerPad, RigidPad, WinklerPad
 from .removal_laws import AbrasiveRemovalLaw, PaperRemovalLaw, ShearPowerRemovalLaw
 from .slurries import GranularSlurry, GumbelCavitation, JFOCavitation, NewtonianSlurry, NoCavitation
@@ -55,7 +55,7 @@ CAVITATION_MODELS: dict[str, type] = {"none": NoCavitation, "gumbel": GumbelCavi
 #: ``removal_law`` -> removal law class.
 REMOVAL_LAWS: dict[str, type] = {"paper": PaperRemovalLaw, "shear_power": ShearPowerRemovalLaw, "abrasive": AbrasiveRemovalLaw}
 #: ``carrier`` -> carrier model class.
-CARRIERS: dict[str, type] = {"rigid": RigidCarrier}
+CARRIERS: dict[str, type] = {"rigid": RigidCarrier, "membrane": MembraneCarrier}
 
 
 def _pick(registry: dict, option: str, name: str) -> type:
@@ -108,6 +108,12 @@ def removal_law(config) -> RemovalLaw:
     return _pick(REMOVAL_LAWS, "removal_law", config.removal_law).from_config(config)
 
 
-def carrier(name: str = "rigid") -> CarrierModel:
-    """The carrier model ``name``."""
-    return _pick(CARRIERS, "carrier", name)()
+def carrier(config="rigid") -> CarrierModel:
+    """The carrier model of a Config (``carrier``, with its zones and wafer plate), or a carrier that takes no inputs by name (``"rigid"``)."""
+    if isinstance(config, str):
+        cls = _pick(CARRIERS, "carrier", config)
+        try:
+            return cls()
+        except TypeError:
+            raise ValueError(f"carrier {config!r} needs its inputs: build it from a Config, cmpsim.models.carrier(config)") from None
+    return _pick(CARRIERS, "carrier", config.carrier).from_config(config)

@@ -148,6 +148,8 @@ class CarrierModel(Protocol):
     name: str
     #: Names of the unknowns u.
     unknowns: tuple
+    #: Whether the carrier presses in zones whose pressures can be tuned.
+    has_zones: bool
 
     def load(self, applied_pressure: float, radius: float) -> float:
         """Total applied load, N."""
@@ -163,3 +165,10 @@ class CarrierModel(Protocol):
 
     def residual_change(self, problem, dp) -> np.ndarray:
         """The change of the residuals under a pressure change dp."""
+
+    def bending_field(self, problem) -> np.ndarray:
+        """The wafer's bending at the cell centres (m), zero for a rigid wafer."""
+
+    def equilibrium(self, problem, solve, start=None, **options):
+        """The :class:`~cmpsim.state.EquilibriumSolution` of ``problem``, with ``solve`` (Newton on the
+        rigid-body unknowns, :func:`cmpsim.equilibrium.solve_equilibrium`) doing the rigid-body part."""

@@ -3,8 +3,11 @@
 The paper's carrier holds the wafer as a rigid body (:class:`RigidCarrier`): three unknowns,
 the film thickness h0 at the centre and the two tilts, driven by the balance of the applied
 load and of the moments about the carrier's pivot at the centre of the wafer face
-(eq. 30-31). A carrier that bends the wafer (a membrane head) adds a class here and an entry
-in the registry of :mod:`cmpsim.models`.
+(eq. 30-31). A membrane head (:class:`MembraneCarrier`) presses the wafer through concentric
+pressure zones and lets it bend as a free Kirchhoff plate (:mod:`cmpsim.plate`,
+:mod:`cmpsim.membrane`): the same three rigid-body unknowns and balances, plus the bending,
+found around the rigid-body Newton solve. The carrier also says how its equilibrium is solved
+(:meth:`RigidCarrier.equilibrium`), so the operating point never asks which carrier it has.
 """
 
 from __future__ import annotations
@@ -12,8 +15,19 @@ from __future__ import annotations
 import numpy as np
 
 from ..geometry import film_thickness
+from ..membrane import BendingError, solve_bending
+from ..plate import KirchhoffPlate, zone_load
+from ..state import EquilibriumError
 
-__all__ = ["RigidCarrier"]
+__all__ = ["RigidCarrier", "MembraneCarrier", "ring_of"]
+
+
+def ring_of(config):
+    """The retaining ring of a Config: (inner radius, outer radius, pressure) in m, m, Pa, or None without ring pressure."""
+    if config.retaining_ring_pressure == 0.0:
+        return None
+    inner = 0.5 * config.wafer_diameter + config.retaining_ring_gap
+    return (inner, inner + config.retaining_ring_width, config.retaining_ring_pressure)
 
 
 class RigidCarrier:
@@ -27,6 +41,45 @@ class RigidCarrier:
 
     name = "rigid"
     unknowns = ("h0", "attack_angle", "cross_tilt")
+    #: The carrier presses in zones whose pressures can be tuned (:func:`cmpsim.tune_zones`).
+    has_zones = False
+    #: Radii of the table of the ring's pad deflection under the wafer (interpolated linearly).
+    RING_TABLE = 1024
+
+    def __init__(self, ring=None):
+        #: The retaining ring: (inner radius, outer radius, pressure) in m, m, Pa, or None.
+        self.ring = None if ring is None or ring[2] == 0.0 else tuple(float(v) for v in ring)
+        self._ring_table = None
+
+    @classmethod
+    def from_config(cls, config) -> "RigidCarrier":
+        """The rigid carrier with the retaining ring of a Config (``retaining_ring_*``; none at zero pressure)."""
+        return cls(ring=ring_of(config))
+
+    def ring_deflection(self, problem, r) -> np.ndarray:
+        """The pad's deflection (m, away from the wafer) at radii ``r`` under the retaining ring's load.
+
+        The ring presses ``retaining_ring_pressure`` on the annulus from wafer radius + gap to
+        + gap + width; the laterally coupled pad carries it to the wafer's edge
+        (:meth:`cmpsim.padstack.LayeredFoundation.annulus_deflection`, tabulated once).
+        """
+        radius = problem.grid.radius
+        key = (problem.foundation, radius)
+        if self._ring_table is None or self._ring_table[0] != key:
+            inner, outer, pressure = self.ring
+            table_r = np.linspace(0.0, radius * (1.0 + 1e-9), self.RING_TABLE)
+            self._ring_table = (key, table_r, problem.foundation.annulus_deflection(table_r, inner, outer, pressure))
+        _, table_r, table_w = self._ring_table
+        return np.interp(r, table_r, table_w)
+
+    def equilibrium(self, problem, solve, start=None, **options):
+        """The equilibrium of ``problem``: ``solve(problem, start=start, **options)``, Newton on the
+        rigid-body unknowns (:func:`cmpsim.equilibrium.solve_equilibrium`)."""
+        return solve(problem, start=start, **options)
+
+    def bending_field(self, problem) -> np.ndarray:
+        """The wafer's bending at the cell centres of ``problem``'s grid, m: none for a rigid wafer."""
+        return np.zeros((problem.grid.n_r, problem.grid.n_theta))
 
     def load(self, applied_pressure: float, radius: float) -> float:
         """Total applied load P_applied pi R_w^2, N."""
@@ -37,8 +90,12 @@ class RigidCarrier:
         return np.array([sigma, sigma / radius, sigma / radius])
 
     def film(self, problem, u, x, y) -> np.ndarray:
-        """Film thickness over a rigid pad at points (x, y), m (eq. 30: dome, tilts, h0)."""
-        return film_thickness(x, y, u[0], u[1], problem.dome_height, problem.grid.radius, cross_tilt=u[2])
+        """Film thickness over the undeformed pad at points (x, y), m (eq. 30: dome, tilts, h0), plus the
+        pad's deflection under the retaining ring if there is one."""
+        h = film_thickness(x, y, u[0], u[1], problem.dome_height, problem.grid.radius, cross_tilt=u[2])
+        if self.ring is None:
+            return h
+        return h + self.ring_deflection(problem, np.hypot(x, y))
 
     def residual(self, problem, p_total) -> np.ndarray:
         """(R_F, R_y, R_x) of a total normal pressure field on the wafer (gauge, Pa)."""
@@ -51,3 +108,116 @@ class RigidCarrier:
     def residual_change(self, problem, dp) -> np.ndarray:
         """The change of (R_F, R_y, R_x) under a change dp of the pressure (the residual is affine in p)."""
         return self.residual(problem, dp) + np.array([1.0, 0.0, 0.0])
+
+
+class MembraneCarrier(RigidCarrier):
+    """A multi-zone membrane head pressing a wafer that bends as a free Kirchhoff plate.
+
+    Zone k presses ``pressures[k]`` (Pa) behind the wafer out to ``radii[k]`` (m); the wafer
+    (``plate``: thickness, Young's modulus, Poisson ratio) bends by w under the zone pressures
+    behind and the slurry and pad pressures in front (:mod:`cmpsim.membrane`). The rigid-body
+    unknowns, the load (the zones' total, ``applied_pressure`` being their area mean) and the
+    balances are the rigid carrier's; the film adds the bending:
+
+        h(x, y) = h_rigid(u; x, y) + w(x, y)       (eq. 30 plus the plate's deflection).
+
+    The bending lives on the grid of the first equilibrium solved and is interpolated
+    (:meth:`cmpsim.grid.PolarGrid.interpolate`, second order) to every point the solver asks,
+    on that grid or a coarser one.
+    """
+
+    name = "membrane"
+    has_zones = True
+    #: Shares of the zones' departure from their mean applied in turn on a cold start (continuation).
+    ZONE_RAMP = (0.0, 0.25, 0.5, 0.75, 1.0)
+
+    def __init__(self, radii, pressures, plate: KirchhoffPlate, ring=None):
+        super().__init__(ring)
+        if len(radii) != len(pressures) or not len(radii):
+            raise ValueError(f"a membrane head needs one pressure per zone; got {len(pressures)} pressures for {len(radii)} zones")
+        self.radii = tuple(float(r) for r in radii)
+        self.pressures = tuple(float(p) for p in pressures)
+        self.plate = plate
+        self.bending = None  # (grid, cell field of w, m) once solved
+        #: A bending (m, cells of the problem's grid) to start the next equilibrium from (a warm start), or None.
+        self.initial_bending = None
+        self._interpolation: dict = {}
+        self.bending_solves = 0
+
+    @classmethod
+    def from_config(cls, config) -> "MembraneCarrier":
+        """The membrane head of a Config: ``zone_radii`` / ``zone_pressures`` (or ``applied_pressure`` in
+        every zone), the wafer plate from ``wafer_thickness``, ``wafer_modulus``, ``wafer_poisson``."""
+        plate = KirchhoffPlate(config.wafer_thickness, config.wafer_modulus, config.wafer_poisson)
+        return cls(config.zone_outer_radii, config.zone_pressure_values, plate, ring=ring_of(config))
+
+    def _bend(self, x, y) -> np.ndarray:
+        grid, w = self.bending
+        x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+        key = (x.shape, hash(x.tobytes()), hash(y.tobytes()))
+        m = self._interpolation.get(key)
+        if m is None:
+            if len(self._interpolation) > 16:
+                self._interpolation.clear()
+            m = self._interpolation[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
+        return (m @ w.ravel()).reshape(x.shape)
+
+    def film(self, problem, u, x, y) -> np.ndarray:
+        """The rigid carrier's film plus the wafer's bending at points (x, y), m."""
+        h = super().film(problem, u, x, y)
+        if self.bending is None:
+            return h
+        return h + self._bend(x, y)
+
+    def bending_field(self, problem) -> np.ndarray:
+        """The wafer's bending w (m, away from the pad) at the cell centres of ``problem``'s grid (0 before a solve)."""
+        if self.bending is None:
+            return super().bending_field(problem)
+        return self._bend(problem.xc, problem.yc)
+
+    def back_pressure(self, grid) -> np.ndarray:
+        """The zone pressures behind the wafer as a cell field on ``grid``, Pa (:func:`cmpsim.plate.zone_load`)."""
+        return zone_load(grid, self.radii, self.pressures)
+
+    def equilibrium(self, problem, solve, start=None, **options):
+        """Rigid-body equilibrium of the flat-backed wafer (or of :attr:`initial_bending`, a warm start),
+        then the bending found around it (:func:`cmpsim.membrane.solve_bending`): each trial bending is
+        one warm-started ``solve``.
+
+        The load stiffness that preconditions the bending is -d(load)/d(h0) / area at the
+        rigid-body equilibrium (one extra pressure solve). Raises EquilibriumError if the
+        bending does not converge.
+        """
+        grid = problem.grid
+        warm = self.initial_bending
+        self.bending = None if warm is None else (grid, np.array(warm, dtype=float).reshape(grid.n_r, grid.n_theta))
+        self._interpolation.clear()
+        sol = solve(problem, start=start, **options)
+        st = sol.state
+        step = 1e-3 * problem.sigma
+        shifted = problem.state(st.u + np.array([step, 0.0, 0.0]))
+        stiffness = -(grid.integrate(shifted.p_total) - grid.integrate(st.p_total)) / (step * grid.integrate(np.ones_like(st.h)))
+        last = {"sol": sol, "iterations": sol.iterations}
+
+        def equilibrium(w):
+            self.bending = (grid, np.array(w, dtype=float, copy=True))
+            last["sol"] = solve(problem, start=last["sol"].state.u, **options)
+            last["iterations"] += last["sol"].iterations
+            return last["sol"].state
+
+        tol = 1e3 * options.get("tol", 1e-9) * problem.sigma
+        target = self.back_pressure(grid)
+        mean = grid.integrate(target) / grid.integrate(np.ones_like(target))
+        # a cold start bends the wafer under uniform zones first, then ramps the zones to theirs
+        ramp = (1.0,) if warm is not None or np.allclose(target, mean, rtol=1e-12, atol=0.0) else self.ZONE_RAMP
+        w, solves = (None if warm is None else self.bending[1]), 0
+        try:
+            for share in ramp:
+                bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol=tol, start=w)
+                w, solves = bent.deflection, solves + bent.solves
+        except BendingError as exc:
+            raise EquilibriumError(f"membrane carrier: {exc}") from exc
+        self.bending = (grid, w)
+        self.bending_solves = solves
+        last["sol"].iterations = last["iterations"]  # Newton steps of every rigid-body solve of the bending
+        return last["sol"]

@@ -21,11 +21,11 @@ __all__ = ["FLOORS", "UTILITIES", "MODEL_OPTIONS", "source_modules", "imports_of
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "abrasion", "kinetics", "materials", "padstack", "uniformity")),
-    ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems", ("grid", "sparse", "reynolds", "cavitation")),
-    ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection; load balance and Newton on the wafer position", ("state", "compliance", "models", "wafer", "loadbalance", "equilibrium")),
+    ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems; the wafer as a plate", ("grid", "sparse", "reynolds", "cavitation", "plate")),
+    ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection; load balance and Newton on the wafer position", ("state", "compliance", "models", "wafer", "loadbalance", "equilibrium", "membrane")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
-    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
+    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "tuning", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.

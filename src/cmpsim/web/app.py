@@ -195,6 +195,39 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
             obj["fields"] = fields_payload(result, names)
             return JSONResponse(obj)
 
+    # ------------------------------------------------------------------ API: zone tuning
+    @app.post(
+        "/api/tune-zones",
+        summary="Zone pressures of a membrane head that flatten the removal profile",
+        description=(
+            "The body is a JSON object of inputs, as for /api/solve, of a membrane head (`carrier`: "
+            "`membrane`, `zone_radii`, optionally `zone_pressures` as the start). The answer is the object "
+            "`cmpsim tune-zones --json` prints: `zone_pressures` (Pa), `within_wafer_nonuniformity` (fraction), "
+            "`profile` (`radius`, `rate`), `before`. 422: bad input or no equilibrium. 429: every job slot taken."
+        ),
+    )
+    def tune_zones_route(
+        payload: dict[str, Any] | None = Body(None),
+        bounds: str = Query("0.5,8 psi", description="bounds of every zone pressure: LOW,HIGH and one unit"),
+        keep: Literal["pressure", "rate"] | None = Query(None, description="also keep the mean pressure or the mean rate"),
+    ):
+        from ..equilibrium import EquilibriumError
+        from ..tuning import tune_zones
+        from ..units import parse_list
+
+        cfg = config_from_request(payload)
+        limits.check_grid(cfg.numerics.grid)
+        with slots:
+            try:
+                limits_pa = parse_list(bounds, "Pa", "bounds", example="psi")
+                if len(limits_pa) != 2:
+                    raise ValueError(f"bounds takes two pressures, LOW,HIGH with one unit (e.g. '0.5,8 psi'); got {bounds!r}")
+                return JSONResponse(tune_zones(cfg, bounds=limits_pa, keep=keep).to_dict())
+            except EquilibriumError as exc:
+                raise InputError(f"no equilibrium: {exc}") from None
+            except ValueError as exc:
+                raise InputError(str(exc), named_parameter(str(exc), setting_names(payload))) from None
+
     # ------------------------------------------------------------------ API: sweeps
     app.include_router(sweep_routes(limits, slots, jobs))
 

@@ -80,6 +80,8 @@ def check_scalars(data: dict, where: str = "") -> None:
             continue
         if key not in PARAMETERS:
             continue  # cmpsim says "unknown parameter" with the known names
+        if PARAMETERS[key].items and isinstance(value, list) and all(isinstance(v, (str, int, float)) and not isinstance(v, bool) for v in value):
+            continue  # a list input as a JSON array (SI numbers or strings with units)
         if isinstance(value, bool) or not isinstance(value, (str, int, float)):
             kind = "null" if value is None else type(value).__name__.replace("dict", "object").replace("list", "array")
             raise InputError(f'{where}{key}: expected a number (SI) or a string with units such as "3 psi"; got a JSON {kind}', key)
@@ -146,16 +148,16 @@ def params_payload() -> dict:
 
     out = []
     for n, p in PARAMETERS.items():
-        kind = "choice" if p.choices else ("grid" if p.unit == "grid" else "number")
+        kind = "choice" if p.choices else ("grid" if p.unit == "grid" else ("list" if p.items else "number"))
         out.append(
             {
                 "name": n,
                 "section": p.section,
                 "symbol": p.symbol,
                 "kind": kind,
-                "unit": "" if kind != "number" else p.unit,
-                "display_unit": "" if kind != "number" else p.display,
-                "default": p.default,
+                "unit": "" if kind not in ("number", "list") else p.unit,
+                "display_unit": "" if kind not in ("number", "list") else p.display,
+                "default": list(p.default) if kind == "list" else p.default,
                 "default_display": format_display(n, p.default),
                 "description": p.description,
                 "source": p.source,

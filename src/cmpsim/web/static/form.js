@@ -7,6 +7,7 @@ const NUMBER = /^[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$/;
 
 export function requestValue(p, text) {
   const t = String(text).trim();
+  if (p.kind === "list") return /[a-z]/i.test(t.replace(/e[-+]?\d/gi, "")) ? t : `${t} ${p.display_unit}`; // "3, 3.5, 4" in the display unit
   if (p.kind !== "number") return t;
   if (NUMBER.test(t)) return p.display_unit ? `${t} ${p.display_unit}` : Number(t);
   return t; // a value with its own unit: cmpsim reads it
