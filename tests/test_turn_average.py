@@ -75,3 +75,51 @@ def test_turn_averaged_sliding_speed_is_the_mean_distance_to_a_circle():
     equal = Kinematics(kin.pad_speed, kin.pad_speed, kin.centre_distance)
     _, _, dux, duy = equal.mean_and_relative(*g.centres)
     assert np.hypot(dux, duy) == pytest.approx(a, rel=1e-14)
+
+
+# ---------------------------------------------------------------------------------- the head's sweep
+def test_head_sweep_quadrature_is_the_time_average_of_the_oscillation():
+    from scipy.integrate import quad
+
+    from cmpsim.kinematics import head_sweep_nodes
+
+    e0, amp = 0.1, 0.03
+    for n in (1, 2, 4):
+        e, w = head_sweep_nodes(e0, amp, n)
+        assert w.sum() == pytest.approx(1.0, rel=1e-15) and np.all(np.abs(e - e0) < amp)
+        for degree in range(2 * n):  # exact below degree 2n
+            f = lambda x: ((x - 0.08) / 0.05) ** degree  # noqa: E731
+            time_mean = quad(lambda t: f(e0 + amp * np.sin(2 * np.pi * t)), 0.0, 1.0, epsabs=1e-14, epsrel=1e-13)[0]
+            assert np.dot(w, f(e)) == pytest.approx(time_mean, rel=1e-12, abs=1e-14)
+    # a smooth, non-polynomial quantity (a speed-like e^1.5): 4 nodes to 1e-7
+    e, w = head_sweep_nodes(e0, amp, 4)
+    time_mean = quad(lambda t: (e0 + amp * np.sin(2 * np.pi * t)) ** 1.5, 0.0, 1.0, epsrel=1e-13)[0]
+    assert np.dot(w, e**1.5) == pytest.approx(time_mean, rel=1e-7)
+    with pytest.raises(ValueError, match="amplitude"):
+        head_sweep_nodes(e0, e0, 4)
+    with pytest.raises(ValueError, match="nodes"):
+        head_sweep_nodes(e0, amp, 0)
+
+
+def test_head_sweep_average_of_the_default_model():
+    from cmpsim.head_sweep import sweep_average
+
+    config = cmpsim.Config.default().replace(grid="12x32")
+    still = cmpsim.solve(config, relative=False)
+    zero = sweep_average(config, amplitude=0.0, nodes=2)
+    # no sweep: the still head's profile (the second node is solved from the first: to round-off)
+    np.testing.assert_allclose(zero.removal_rate_profile, still.removal_rate_profile, rtol=1e-12)
+    assert zero.within_wafer_nonuniformity == pytest.approx(still.within_wafer_nonuniformity, rel=1e-9)
+    two, four = (sweep_average(config, amplitude="30 mm", nodes=n) for n in (2, 4))
+    # the average is the weighted mean of the nodes' turn-averaged profiles
+    np.testing.assert_allclose(four.removal_rate_profile, np.mean([r.removal_rate_profile for r in four.results], axis=0), rtol=1e-14)
+    assert [r.config.centre_distance for r in four.results] == pytest.approx(list(four.centre_distances), rel=1e-15)
+    # the rate is nearly proportional to the sliding speed Omega e, whose cycle average is Omega e_0:
+    # the swept mean stays within 0.5 % of the still one, while the profile's shape changes
+    assert four.removal_rate_mean == pytest.approx(still.removal_rate_mean, rel=5e-3)
+    assert four.within_wafer_nonuniformity != pytest.approx(still.within_wafer_nonuniformity, rel=0.05)
+    # and 2 nodes already give the 4-node average closely
+    assert two.removal_rate_mean == pytest.approx(four.removal_rate_mean, rel=5e-4)
+    assert two.within_wafer_nonuniformity == pytest.approx(four.within_wafer_nonuniformity, rel=0.05)
+    print(f"\nmean rate still {still.removal_rate_mean * 6e10:.3f}, swept (2 / 4 nodes) {two.removal_rate_mean * 6e10:.3f} / {four.removal_rate_mean * 6e10:.3f} nm/min; "
+          f"WIWNU still {100 * still.within_wafer_nonuniformity:.3f} %, swept {100 * four.within_wafer_nonuniformity:.3f} %")
