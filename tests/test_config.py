@@ -42,8 +42,9 @@ def test_default_is_the_papers_operating_point_with_the_predictive_physics():
     assert c.dome_height == pytest.approx(5e-6)
     assert c.wafer_diameter == pytest.approx(0.0762)
     assert c.model == "lep"
-    assert (c.slurry_model, c.cavitation, c.pad_compliance, c.removal_law) == ("newtonian", "gumbel", "winkler", "shear_power")
-    assert c.slurry_viscosity == pytest.approx(5e-3)
+    # issue 24: the abrasive removal law; the viscosity follows the loading and is 5 mPa s at the default loading
+    assert (c.slurry_model, c.cavitation, c.pad_compliance, c.removal_law) == ("newtonian", "gumbel", "winkler", "abrasive")
+    assert c.slurry_viscosity == 0.0 and c.newtonian_viscosity == pytest.approx(5e-3, rel=1e-14)
     assert (c.pad_modulus, c.pad_hardness) == (pytest.approx(0.5e9), pytest.approx(50e6))
     assert (c.asperity_radius, c.pad_roughness, c.reference_roughness) == (
         pytest.approx(7e-6), pytest.approx(5e-6), pytest.approx(5e-6))
@@ -124,7 +125,8 @@ def test_paper_preset_differs_from_the_defaults_exactly_in_the_listed_inputs():
 
     paper, default = Config.paper().to_dict(), Config.default().to_dict()
     changed = {k for k in default if paper[k] != default[k]}
-    assert changed == set(PRESETS["paper"])
+    # the paper's granular_density (134 kg/m^3) sets its solids_loading (issue 24: one setting, two names)
+    assert changed == set(PRESETS["paper"]) | {"solids_loading"}
     assert PRESETS["default"] == {} and Config.preset("default") == Config.default()
     assert Config.preset("paper") == Config.paper()
     with pytest.raises(ValueError, match="preset must be one of 'default', 'paper'"):
@@ -140,7 +142,50 @@ def test_a_config_file_may_start_from_a_preset(tmp_path):
 @pytest.mark.parametrize("value", ["1 m", "5 um"])
 def test_a_particle_larger_than_the_roughness_allows_is_refused_by_name_before_solving(value):
     with pytest.raises(ValueError, match=r"particle_diameter .*(out of range|too large for pad_roughness).*valid range"):
-        Config.default().replace(particle_diameter=value, pad_roughness="15 um")
+        Config.paper().replace(particle_diameter=value, pad_roughness="15 um")
+
+
+def test_the_grain_flow_size_limit_applies_to_the_granular_slurry_only_and_says_why():
+    assert Config.default().replace(particle_diameter="1 um").particle_diameter == pytest.approx(1e-6)
+    assert Config.default().replace(particle_diameter="2 um").particle_diameter == pytest.approx(2e-6)
+    with pytest.raises(ValueError, match=r"slurry_model = 'granular'.*averages over many grains"):
+        Config.paper().replace(particle_diameter="1.5 um")
+    with pytest.raises(ValueError, match=r"particle_diameter .*out of range"):
+        Config.default().replace(particle_diameter="2.5 um")
+
+
+def test_solids_loading_reads_percent_and_derives_the_granular_density():
+    c = Config.default().replace(solids_loading="3 %")
+    assert c.solids_loading == pytest.approx(0.03) and c.granular_density == 0.0
+    phi = (0.03 / 2200) / (0.03 / 2200 + 0.97 / 1000)
+    assert c.grain_bulk_density == pytest.approx(phi * 2200, rel=1e-12)
+    assert c.solid_volume_fraction == pytest.approx(phi, rel=1e-12)
+
+
+def test_an_old_granular_density_sets_the_solids_loading_and_a_contradiction_is_refused():
+    old = Config.default().replace(granular_density="30.5 kg/m^3")
+    assert old.grain_bulk_density == 30.5
+    assert old.solids_loading == pytest.approx(0.0300009, rel=1e-5)
+    # a later solids_loading wins and the density is derived again
+    assert old.replace(solids_loading="5 %").granular_density == 0.0
+    # both at once: consistent is fine, contradictory names both
+    assert Config.default().replace(granular_density=30.5, solids_loading=old.solids_loading).grain_bulk_density == 30.5
+    with pytest.raises(ValueError, match=r"granular_density = 30.5 kg/m\^3 and solids_loading = 0.125 contradict"):
+        Config.default().replace(granular_density=30.5, solids_loading="12.5 %")
+    # a TOML round trip keeps the pair
+    assert Config.from_mapping(old.to_sections()) == old
+
+
+def test_the_viscosity_follows_the_loading_by_krieger_dougherty_unless_set():
+    from cmpsim.materials import krieger_dougherty
+
+    c = Config.default()
+    dense = c.replace(solids_loading="30 %")
+    phi = dense.solid_volume_fraction
+    assert dense.newtonian_viscosity == pytest.approx(c.carrier_viscosity * (1 - phi / 0.71) ** (-2.5 * 0.71), rel=1e-14)
+    assert dense.newtonian_viscosity > c.newtonian_viscosity
+    assert float(krieger_dougherty(1e-6, 1.0)) == pytest.approx(1 + 2.5e-6, rel=1e-9)  # Einstein's limit
+    assert c.replace(slurry_viscosity="30 mPa*s", solids_loading="30 %").newtonian_viscosity == pytest.approx(0.03)
 
 
 def test_the_paper_preset_holds_exactly_the_si_values_of_cmpsim_0_1():

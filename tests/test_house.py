@@ -22,6 +22,16 @@ def test_importing_any_module_runs_no_import_loop():
     assert import_cycles(SRC) == []
 
 
+def test_the_solver_rooms_do_not_need_each_other():
+    """compliance <-> equilibrium was a circle (one way at import, the other inside functions);
+    no two rooms of cmpsim need each other now, not even inside a function (issue 22). Within a
+    package, ``sweeps.executors`` looks ``sweeps._run_point`` up at call time on purpose."""
+    from cmpsim.testing.house import room_of
+
+    across = [c for c in import_cycles(SRC, top_level_only=False) if len({room_of(m) for m in c}) > 1]
+    assert across == [], across
+
+
 def test_units_and_config_do_not_need_each_other():
     """The parameter registry hands its entries to cmpsim.units; units never imports config,
     not even inside a function (issue 22: the config <-> units circle)."""
@@ -76,17 +86,19 @@ def test_no_module_outside_the_registry_tests_a_model_option_by_name():
 def test_the_option_scan_catches_a_name_test(tmp_path):
     from cmpsim.testing.house import option_name_comparisons
 
-    root = tmp_path / "cmpsim"
-    root.mkdir()
-    (root / "__init__.py").write_text("")
-    (root / "config.py").write_text("ok = cfg.cavitation == 'jfo'\n")  # config checks its inputs: allowed
-    (root / "equilibrium.py").write_text(
-        "a = problem.cavitation == 'jfo'\n"
-        "b = 'granular' != lub.slurry_model\n"
-        "c = config.removal_law in ('paper', 'shear_power')\n"
-        "d = carrier not in ['rigid']\n"
-        "e = problem.variant == 'hydrodynamic'\n"  # not a model axis of the registry
-        "f = problem.cavitation == other\n"  # not a string
+    root = _package(
+        tmp_path,
+        {
+            "config": "ok = cfg.cavitation == 'jfo'\n",  # config checks its inputs: allowed
+            "equilibrium": (
+                "a = problem.cavitation == 'jfo'\n"
+                "b = 'granular' != lub.slurry_model\n"
+                "c = config.removal_law in ('paper', 'shear_power')\n"
+                "d = carrier not in ['rigid']\n"
+                "e = problem.variant == 'hydrodynamic'\n"  # not a model axis of the registry
+                "f = problem.cavitation == other\n"  # not a string
+            ),
+        },
     )
     found = option_name_comparisons(root)
     assert [line.split(":")[1] for line in found] == ["1", "2", "3", "4"], found
@@ -129,3 +141,9 @@ def test_the_registry_refuses_unknown_names_and_inapplicable_cavitation():
         models.slurry_model("granular", "gumbel", -1e4, 3e4)
     with pytest.raises(ValueError, match=r"cavitation_pressure must be a gauge pressure"):
         models.slurry_model("newtonian", "jfo", None, 3e4)
+
+
+def test_no_room_is_over_about_600_lines():
+    """Small modules with one job (issue 22: none over about 600 lines; 650 leaves the 'about')."""
+    long = {name: n for name, path in source_modules(SRC).items() if (n := len(path.read_text(encoding="utf-8").splitlines())) > 650}
+    assert long == {}, long

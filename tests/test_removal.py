@@ -38,11 +38,11 @@ def test_relative_removal_rate_is_nan_with_a_warning_when_the_reference_case_rem
     assert '"removal_rate_relative": null' in r.to_json()
 
 
-def test_default_model_removal_is_the_shear_power_of_the_contact_load():
-    """The default model removes by the shear-power law with no fluid shear (fluid_shear_weight 0):
-    under uniform sliding speed (equal platen and carrier speeds) its wafer mean is k_s mu U times
-    the mean contact pressure exactly, whatever share the Newtonian slurry carries."""
-    r = cmpsim.solve(rotation_speed="1 rpm", grid="coarse", relative=False)
+def test_shear_power_removal_of_the_default_model_is_the_shear_power_of_the_contact_load():
+    """The default model with the shear-power law (its removal law before issue 24) and no fluid
+    shear (fluid_shear_weight 0): under uniform sliding speed (equal platen and carrier speeds) its
+    wafer mean is k_s mu U times the mean contact pressure exactly, whatever share the Newtonian slurry carries."""
+    r = cmpsim.solve(removal_law="shear_power", rotation_speed="1 rpm", grid="coarse", relative=False)
     c = r.config
     assert (c.removal_law, c.fluid_shear_weight) == ("shear_power", 0.0)
     preston = c.shear_power_coefficient * c.friction_coefficient * c.applied_pressure * r.sliding_speed

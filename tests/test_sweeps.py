@@ -503,15 +503,23 @@ def test_a_close_that_hangs_is_given_up_within_its_bound_and_a_failed_one_is_not
     assert _close_within(broken, 5.0) is False
 
 
-def test_the_child_processes_of_an_interrupted_run_are_killed():
-    from cmpsim.sweeps.executors import _kill_child_processes
+def test_the_worker_processes_of_an_interrupted_run_are_killed_and_older_children_are_not():
+    from cmpsim.sweeps.executors import _child_pids, _kill_new_child_processes
 
-    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(600)"])
+    sleep = [sys.executable, "-c", "import time; time.sleep(600)"]
+    older = subprocess.Popen(sleep)
     try:
-        t0 = time.monotonic()
-        assert _kill_child_processes() >= 1
-        child.wait(timeout=10)  # reaped already by the kill (its status is then unknown to Popen); it sleeps 600 s otherwise
-        assert time.monotonic() - t0 < 10
+        before = _child_pids()
+        worker = subprocess.Popen(sleep)  # started after the snapshot, like the cluster's workers
+        try:
+            t0 = time.monotonic()
+            assert _kill_new_child_processes(before) == 1
+            worker.wait(timeout=10)  # reaped already by the kill (its status is then unknown to Popen); it sleeps 600 s otherwise
+            assert time.monotonic() - t0 < 10
+            assert older.poll() is None, "a process started before the cluster was killed"
+        finally:
+            if worker.poll() is None:
+                worker.kill()
     finally:
-        if child.poll() is None:
-            child.kill()
+        older.kill()
+        older.wait()

@@ -496,3 +496,14 @@ def test_the_docs_page_states_the_limits_and_messages_the_code_has():
         with pytest.raises(ValueError) as info:
             Config.default().replace(applied_pressure=value)
         assert f"*{info.value}*" in text, value
+
+
+def test_the_web_form_offers_the_abrasive_inputs_with_units_and_choices(client):
+    """Issue 24: the form is built from /api/params, so the new inputs appear with their units and choices."""
+    by_name = {p["name"]: p for p in client.get("/api/params").json()["parameters"]}
+    assert by_name["solids_loading"]["display_unit"] == "%" and by_name["solids_loading"]["default_display"] == "12.5"
+    assert by_name["particle_size_std"]["display_unit"] == "nm"
+    assert by_name["abrasive"]["choices"] == ["silica", "ceria", "alumina"]
+    assert by_name["film"]["choices"] == ["oxide", "copper", "tungsten"]
+    assert by_name["removal_kinetics"]["choices"] == ["mechanical", "two_step"]
+    assert "abrasive" in by_name["removal_law"]["choices"] and by_name["removal_law"]["default_display"] == "abrasive"

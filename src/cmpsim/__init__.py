@@ -31,6 +31,7 @@ _LAZY = {
     "reproduce": ("cmpsim.reproduction", "reproduce"),
     "validate": ("cmpsim.validation", "validate"),
     "calibrate": ("cmpsim.calibration", "calibrate"),
+    "die": ("cmpsim.die", None),  # the chip-scale model, a package: cmpsim.die.simulate(...)
 }
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -45,7 +46,8 @@ def __getattr__(name: str) -> Any:
         import importlib
 
         module, attr = _LAZY[name]
-        value = getattr(importlib.import_module(module), attr)
+        value = importlib.import_module(module)
+        value = value if attr is None else getattr(value, attr)
         globals()[name] = value
         return value
     raise AttributeError(f"module 'cmpsim' has no attribute {name!r}")

@@ -48,27 +48,14 @@ import scipy.sparse as sp
 
 from .grid import face_operators as _face_operators
 # the pad stack's kernels moved to cmpsim.padstack; re-exported here, where they were public
-from .padstack import (
-    LayeredFoundation,
-    PadLayer,
-    WinklerFoundation,
-    constrained_modulus,
-    foundation_stiffness,
-    layer_stiffness,
-    plate_bending_stiffness,
-)
+from .padstack import *  # noqa: F403
+from .padstack import __all__ as _PADSTACK
 from .reynolds import FaceCoefficients, factorize, lubrication_coefficients
 from .state import EquilibriumError, PressureState
 
 __all__ = [
+    *_PADSTACK,
     "COMPLIANCE_MODELS",
-    "PadLayer",
-    "constrained_modulus",
-    "foundation_stiffness",
-    "WinklerFoundation",
-    "LayeredFoundation",
-    "layer_stiffness",
-    "plate_bending_stiffness",
     "CoupledLinearisation",
     "coupled_state",
     "coupled_jacobian",
@@ -277,8 +264,13 @@ class CoupledLinearisation:
 def _gmres(matvec, b, x0, rtol: float, max_iter: int) -> np.ndarray:
     """Solve M x = b by GMRES without restart (modified Gram-Schmidt, Givens rotations).
 
-    For the well-clustered, left-preconditioned systems of the layered pad (30-100 iterations),
-    this is much cheaper than a general restarted implementation on long vectors.
+    Kept hand-written because the library's is slower on this problem:
+    ``scipy.sparse.linalg.gmres(restart=max_iter, maxiter=1)`` (the same algorithm, scipy 1.17)
+    took 1.16-1.24x the time of this function on the Newton systems of the layered pad
+    (``benchmarks/bench_house.py``, 21 systems of one equilibrium at the paper's base case,
+    default grid, best of 5-7, three runs; the steps agree to 5e-15): its Givens rotations index
+    the Hessenberg matrix with fancy indexing at every inner step, which costs more than the
+    preconditioned mat-vecs of these well-clustered systems (30-100 iterations).
     Raises ValueError if the relative residual is not below ``rtol`` after ``max_iter``.
     """
     r = b - matvec(x0)

@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from . import units
+from .materials import ABRASIVES, FILMS, krieger_dougherty, mass_fraction, volume_fraction
 
 __all__ = [
     "Param",
@@ -91,6 +92,10 @@ class Param:
         return f"{lb}{lo}, {hi}{hb} {self.display}"
 
 
+#: Carrier viscosity that gives Thakurta et al.'s 0.005 Pa s at the default loading (12.5 wt% silica)
+#: through the Krieger-Dougherty law (docs/model.md, 'Slurry viscosity').
+_CARRIER_VISCOSITY = 5e-3 / float(krieger_dougherty(volume_fraction(0.125, ABRASIVES["silica"].density), 1.0))
+
 _P = Param
 PARAMETERS: dict[str, Param] = {
     p.name: p
@@ -99,6 +104,7 @@ PARAMETERS: dict[str, Param] = {
         _P("wafer_diameter", "wafer", "2 R_w", "m", "in", 0.0762, "Wafer diameter", "Paper Table 1 (3 in)", 0.0),
         _P("dome_height", "wafer", "delta_d", "m", "um", 5e-6, "Dome height of the convex wafer (0 = flat)", "Paper Table 1", 0.0, None, False),
         _P("edge_exclusion", "wafer", "EE", "m", "mm", 3e-3, "Metrology edge exclusion: the outer annulus left out of the within-wafer uniformity (also < wafer_diameter / 2)", "Wafer metrology convention: flatness and thickness are specified over a fixed quality area inside a nominal edge exclusion, 3 mm for 100-200 mm wafers (SEMI M1; SEMI MF1530), 2 mm and less for 300 mm (ITRS); see docs/model.md ('Within-wafer uniformity')", 0.0, None, False),
+        _P("film", "wafer", "-", "choice", "", "oxide", "Film being polished (its modulus, Poisson ratio and hardness enter the abrasive removal law)", "cmpsim.materials.FILMS (each entry with its source); docs/model.md ('Abrasive removal')", choices=tuple(FILMS)),
         # ---------------------------------------------------------------- process
         _P("applied_pressure", "process", "P", "Pa", "psi", 4 * 6894.757293168361, "Applied load over wafer area", "Paper Table 1 (4 psi; range 2-6 psi)", 0.0),
         _P("rotation_speed", "process", "Omega_p", "rad/s", "rpm", 2 * math.pi, "Pad (relative) rotation speed", "Paper Table 1 (60 rpm; range 30-90 rpm)", 0.0),
@@ -107,21 +113,31 @@ PARAMETERS: dict[str, Param] = {
         _P("kinematics", "process", "-", "choice", "", "rotating", "Surface velocities: rigid rotations of pad and wafer, or uniform sliding", "docs/model.md, 'Kinematics'", choices=("rotating", "sliding")),
         _P("preston_coefficient", "process", "K", "m/(s*Pa^2)", "m/(s*Pa^2)", 2.5e-18, "Runnels-Eyman coefficient in RR = K sigma_n tau", "Scale only (relative RR is independent of it): about 100 nm/min at the base case, as Preston k_p = 1e-13 1/Pa gives at 4 psi and 0.63 m/s; see docs/model.md", 0.0),
         _P("carrier", "process", "-", "choice", "", "rigid", "Wafer carrier: a rigid wafer held at a pivot at the centre of its face, under a uniform applied pressure (the paper)", "Paper eq. 30-31; docs/model.md ('Force and moment balance')", choices=("rigid",)),
-        _P("removal_law", "process", "-", "choice", "", "shear_power", "Removal law: the paper's RR = K sigma_n tau, or the shear-power law RR = k_s (mu p_c + chi tau_f) |du|", "docs/model.md ('Removal rate'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023)", choices=("paper", "shear_power")),
+        _P("removal_law", "process", "-", "choice", "", "abrasive", "Removal law: the paper's RR = K sigma_n tau; the shear-power law RR = k_s (mu p_c + chi tau_f) |du|; or abrasive particles trapped in the real contact ploughing the film", "docs/model.md ('Removal rate', 'Abrasive removal'); Borucki et al., ECS J. Solid State Sci. Technol. 12, 044004 (2023); Luo & Dornfeld, IEEE Trans. Semicond. Manuf. 14, 112 (2001)", choices=("paper", "shear_power", "abrasive")),
+        _P("abrasion_efficiency", "process", "k_a", "", "", 0.1, "Share of the groove ploughed by a trapped particle that leaves as debris (abrasive removal law)", "Three-body abrasion (particles free between two surfaces) wears about ten times less than two-body abrasion, which cuts the whole groove (Rabinowicz, Dunn & Russell, Wear 4, 345 (1961)); scale of the law, see docs/model.md ('Abrasive removal')", 0.0, 1.0, False, False),
+        _P("removal_kinetics", "process", "-", "choice", "", "mechanical", "Removal kinetics: the mechanical removal alone, or a thermally activated chemical step in series with it (two-step, flash heating)", "docs/model.md ('Two-step kinetics'); Sorooshian, Philipossian, Borucki et al. (2004-2006); Mariscal et al., ECS J. Solid State Sci. Technol. 9, 044008 (2020)", choices=("mechanical", "two_step")),
+        _P("chemical_rate", "process", "c_0", "m/s", "nm/min", 200.0 / 6e10, "Rate of the chemical step at slurry_temperature (removal_kinetics = 'two_step')", "No published two-step constants for oxide, copper or tungsten were available to this project: an order of magnitude (200 nm/min, the rates of the shipped oxide series), to be calibrated (`cmpsim calibrate --free chemical_rate`); docs/model.md ('Two-step kinetics')", 0.0),
+        _P("activation_energy", "process", "E_a", "J/mol", "kJ/mol", 50e3, "Activation energy of the chemical step (removal_kinetics = 'two_step')", "Middle of the 20-80 kJ/mol of CMP Arrhenius fits (second-hand; Sorooshian et al. 2004-2006); to be calibrated; docs/model.md ('Two-step kinetics')", 0.0, None, False),
+        _P("flash_heating_coefficient", "process", "beta", "K*m^2/W", "K*m^2/W", 1e-3, "Temperature rise of the surface per unit friction power per area, T = T_0 + beta mu p_c |du| (removal_kinetics = 'two_step')", "Order of magnitude: pad surface temperatures rise by 10-20 K at friction powers of 1e4 W/m^2 (IR measurements of the Philipossian group, second-hand); docs/model.md ('Two-step kinetics')", 0.0, None, False),
+        _P("slurry_temperature", "process", "T_0", "K", "K", 298.15, "Temperature of slurry and pad away from the contacts (removal_kinetics = 'two_step')", "Room temperature, 25 C", 200.0, 400.0),
         _P("shear_power_coefficient", "process", "k_s", "1/Pa", "1/Pa", 2.5e-13, "Scale k_s of the shear-power removal law", "Scale only: k_s mu = 1e-13 1/Pa, the order of oxide Preston constants (Preston's k_p P U gives ~100 nm/min at 4 psi and 0.63 m/s); see docs/model.md", 0.0),
         _P("fluid_shear_weight", "process", "chi", "", "", 0.0, "Share chi of the slurry's shear power that removes material in the shear-power law", "docs/model.md ('Removal rate'): removal needs abrasive contact pressure, which the slurry's bulk shear does not give", 0.0, 1.0, False, False),
         _P("removal_shear", "process", "-", "choice", "", "total", "Shear stress tau of the removal law: slurry plus pad-summit friction, or slurry only (Runnels & Eyman)", "docs/model.md ('Removal rate')", choices=("total", "slurry")),
         # ---------------------------------------------------------------- slurry
         _P("slurry_model", "slurry", "-", "choice", "", "newtonian", "Slurry rheology: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (solved in p)", "docs/model.md ('Newtonian slurry and cavitation')", choices=("granular", "newtonian")),
-        _P("slurry_viscosity", "slurry", "eta", "Pa*s", "mPa*s", 5e-3, "Viscosity of the Newtonian slurry (slurry_model = 'newtonian')", "Thakurta et al., J. Electrochem. Soc. 148(4) G207 (2001), doi 10.1149/1.1355691: 0.005 Pa s; CMP slurries 1-30 mPa s (Lai, PhD MIT 2001: 0.03 Pa s); the range stops at 10 Pa s, far beyond any slurry", 0.0, 10.0, True, False),
+        _P("slurry_viscosity", "slurry", "eta", "Pa*s", "mPa*s", 0.0, "Viscosity of the Newtonian slurry (slurry_model = 'newtonian'); 0 = from solids_loading by the Krieger-Dougherty law on carrier_viscosity", "Set: a measured value (Thakurta et al., J. Electrochem. Soc. 148(4) G207 (2001): 0.005 Pa s; CMP slurries 1-30 mPa s; Lai, PhD MIT 2001: 0.03 Pa s); 0: Krieger & Dougherty, Trans. Soc. Rheol. 3, 137 (1959), docs/model.md ('Slurry viscosity'); the range stops at 10 Pa s, far beyond any slurry", 0.0, 10.0, False, False),
+        _P("carrier_viscosity", "slurry", "eta_c", "Pa*s", "mPa*s", _CARRIER_VISCOSITY, "Viscosity of the liquid that carries the particles (used when slurry_viscosity = 0)", "Thakurta et al.'s 0.005 Pa s taken as the slurry viscosity at the default loading (12.5 wt% silica): the carrier viscosity the Krieger-Dougherty law implies for it (water: 0.89 mPa s at 25 C; slurry additives raise it); docs/model.md ('Slurry viscosity')", 0.0, 10.0, True, False),
+        _P("abrasive", "slurry", "-", "choice", "", "silica", "Abrasive material (its density, modulus, Poisson ratio and hardness)", "cmpsim.materials.ABRASIVES (each entry with its source); docs/model.md ('Abrasive removal')", choices=tuple(ABRASIVES)),
+        _P("solids_loading", "slurry", "w", "", "%", 0.125, "Abrasive solids loading, mass fraction (e.g. '12.5 %'); sets the particle count, the granular bulk density and the slurry viscosity", "12.5 wt% silica, a typical oxide slurry (US 9,499,721 B2); the range stops at 60 wt%, beyond any CMP slurry", 0.0, 0.6, False, True),
+        _P("particle_size_std", "slurry", "s_d", "m", "nm", 0.0, "Standard deviation of the particle diameters (log-normal number distribution of mean particle_diameter); 0 = all particles alike", "Not printed for the shipped data sets: 0 (the paper and every shipped series quote one size); Luo & Dornfeld, IEEE Trans. Semicond. Manuf. 16, 469 (2003) on its role", 0.0, 2e-6, False, False),
         _P("cavitation", "slurry", "-", "choice", "", "gumbel", "Cavitation of the Newtonian slurry: none (full Sommerfeld), Gumbel (p -> max(p, p_cav)) or mass-conserving JFO; the granular slurry takes only 'none'", "docs/model.md ('Newtonian slurry and cavitation'); Elrod, J. Lubr. Technol. 103, 350 (1981); Giacopini et al., J. Tribol. 132, 041702 (2010)", choices=("none", "gumbel", "jfo")),
         _P("cavitation_pressure", "slurry", "p_cav", "Pa", "kPa", -98.2e3, "Gauge pressure at which the Newtonian slurry cavitates (used by cavitation = 'gumbel' or 'jfo')", "Vapour pressure of water at 25 C (3.17 kPa, CRC Handbook) minus one atmosphere; consistent with the sub-ambient film pressures of tens of kPa measured by Shan, Levert, Meade, Tichy & Danyluk, J. Tribol. 122 (2000); see docs/model.md", -101325.0, 0.0, False, False),
         # ---------------------------------------------------------------- slurry (Haff grain flow)
-        _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter (also < pad_roughness / 10: particles must fit in the roughness layer that forms the film)", "Paper Table 1 (100 nm; 200 nm studied); CMP abrasives are 10 nm - 1 um (Lai 2001 used up to 1 um alumina), so the range stops at 2 um", 0.0, 2e-6, True, False),
+        _P("particle_diameter", "slurry", "d", "m", "nm", 100e-9, "Abrasive particle diameter, number mean (with the granular slurry also < pad_roughness / 10: grains must fit many times in the roughness layer that forms the film)", "Paper Table 1 (100 nm; 200 nm studied); CMP abrasives are 10 nm - 1 um (Lai 2001 used up to 1 um alumina), so the range stops at 2 um", 0.0, 2e-6, True, False),
         _P("w_over_k", "slurry", "w/k", "", "", 4e-6, "Haff dissipation over conductivity constant", "Paper Table 1 (see docs/model.md on w/k vs k/w)", 0.0),
         _P("t_over_a", "slurry", "t/a", "", "", 1.0, "Haff pressure over viscosity constant", "Paper Table 1; Dai et al.", 0.0),
         _P("fluctuation_ratio", "slurry", "v/U", "", "", 3.0, "Granular fluctuation velocity over sliding speed", "Paper Table 1 (V/U = 3)", 0.0),
-        _P("granular_density", "slurry", "rho", "kg/m^3", "kg/m^3", 134.0, "Bulk density of the abrasive grains (solid volume fraction x particle density)", "12.5 wt% silica (2200 kg/m^3) in water, typical oxide slurry (US 9,499,721 B2); see docs/model.md", 0.0),
+        _P("granular_density", "slurry", "rho", "kg/m^3", "kg/m^3", 0.0, "Bulk density of the abrasive grains (solid volume fraction x particle density) of the granular slurry; 0 = from solids_loading and the abrasive's density. Older input: a value > 0 sets solids_loading", "phi rho_a; 134 kg/m^3 for 12.5 wt% silica (2200 kg/m^3) in water (US 9,499,721 B2; the paper preset's value); see docs/model.md ('Solids loading')", 0.0, None, False),
         _P("diameter_gap_ratio", "slurry", "d/s", "", "", 67.0, "Particle diameter over mean gap between grains (Haff: s << d)", "Calibrated, not measured: sets the edge granular pressure to ~32 kPa at 60 rpm; see docs/model.md ('Ambient granular pressure')", 0.0),
         # ---------------------------------------------------------------- pad
         _P("pad_roughness", "pad", "sigma", "m", "um", 5e-6, "Std of pad summit heights (R_q)", "Summit-height std of CMP pads: 5 um (Bozkaya & Mueftue, JES 156 H890, 2009), 5.24 um fitted to a pad compression test (Suzuki et al., CIRP Ann. 2017); conditioned IC1000 Ra about 5 um (Saka et al. 2008). Paper preset: 15 um (paper Table 1; 10, 20 um studied)", 0.0),
@@ -166,6 +182,8 @@ PRESETS: dict[str, dict[str, Any]] = {
     "paper": {
         "removal_law": "paper",
         "slurry_model": "granular",
+        "granular_density": 134.0,
+        "slurry_viscosity": 5e-3,
         "cavitation": "none",
         "pad_compliance": "rigid",
         # SI floats, exactly the defaults of cmpsim 0.1.0 ("15 um" would parse to 1.4999999999999999e-05 m)
@@ -216,12 +234,50 @@ def _check_consistency(c: "Config") -> None:
             f"valid range [0, 0.5) with pad_compliance = {c.pad.pad_compliance!r}"
         )
     limit = MAX_PARTICLE_ROUGHNESS_RATIO * c.pad.pad_roughness
-    if c.slurry.particle_diameter >= limit:
+    if c.slurry.slurry_model == "granular" and c.slurry.particle_diameter >= limit:
         raise ValueError(
             f"particle_diameter = {c.slurry.particle_diameter:g} m is too large for pad_roughness = "
-            f"{c.pad.pad_roughness:g} m: valid range (0, {limit:g}) m, i.e. below {MAX_PARTICLE_ROUGHNESS_RATIO:g} x pad_roughness "
-            "(a particle must fit many times in the roughness layer that forms the film)"
+            f"{c.pad.pad_roughness:g} m with slurry_model = 'granular': valid range (0, {limit:g}) m, i.e. below "
+            f"{MAX_PARTICLE_ROUGHNESS_RATIO:g} x pad_roughness (the grain-flow slurry averages over many grains across "
+            "the roughness layer that forms the film; the Newtonian slurry takes particles up to 2 um)"
         )
+    if c.slurry.slurry_model == "granular" and c.slurry.granular_density == 0 and c.slurry.solids_loading == 0:
+        raise ValueError(
+            "solids_loading = 0 leaves the granular slurry without grains (its pressure is that of the grains): valid range "
+            "(0, 0.6) with slurry_model = 'granular' and granular_density = 0, or set granular_density > 0"
+        )
+
+
+def _loading_overrides(current: "Config", given: dict[str, Any]) -> dict[str, Any]:
+    """Keep solids_loading and granular_density one setting (docs/model.md, 'Solids loading').
+
+    ``granular_density`` > 0 (the older input) sets ``solids_loading`` (w from phi = rho /
+    rho_a); ``solids_loading`` given alone returns ``granular_density`` to 0 (derived); both
+    given and disagreeing by more than 1 % (more than rounding) is an error naming both.
+    """
+    out = dict(given)
+    abrasive = ABRASIVES[out.get("abrasive", current.slurry.abrasive)]
+    rho = out.get("granular_density", current.slurry.granular_density if "abrasive" in out else 0.0)
+    if "granular_density" in out or ("abrasive" in out and rho > 0 and "solids_loading" not in out):
+        if rho > 0:
+            phi = rho / abrasive.density
+            if phi >= 0.6:
+                raise ValueError(
+                    f"granular_density = {rho:g} kg/m^3 is a solid volume fraction of {phi:.3g} for abrasive = {abrasive.name!r} "
+                    f"({abrasive.density:g} kg/m^3): valid range (0, {0.6 * abrasive.density:g}) kg/m^3"
+                )
+            implied = float(mass_fraction(phi, abrasive.density))
+            if "solids_loading" in out and abs(out["solids_loading"] - implied) > 1e-2 * max(implied, 1e-12):
+                raise ValueError(
+                    f"granular_density = {rho:g} kg/m^3 and solids_loading = {out['solids_loading']:g} contradict each other: "
+                    f"with abrasive = {abrasive.name!r} ({abrasive.density:g} kg/m^3) in water that density is a solids loading of "
+                    f"{implied:.6g}. Set only solids_loading (granular_density = 0 derives the density from it); "
+                    "granular_density is the older input, kept for old configurations"
+                )
+            out["solids_loading"] = implied
+    elif "solids_loading" in out:
+        out["granular_density"] = 0.0
+    return out
 
 
 def _parse_grid(value: Any) -> str:
@@ -320,8 +376,8 @@ class Config:
     def replace(self, **overrides) -> "Config":
         """A copy with some inputs changed (flat names; strings with units, Quantities or SI)."""
         groups: dict[str, dict[str, Any]] = {}
-        for name, value in overrides.items():
-            v = parse_value(name, value)
+        parsed = _loading_overrides(self, {name: parse_value(name, value) for name, value in overrides.items()})
+        for name, v in parsed.items():
             groups.setdefault(PARAMETERS[name].section, {})[name] = v
         new = Config(**{s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS})
         _check_consistency(new)
@@ -385,6 +441,23 @@ class Config:
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
         return cls.from_mapping(data, base=base)
+
+    @property
+    def solid_volume_fraction(self) -> float:
+        """Solid volume fraction phi of the slurry, from solids_loading and the abrasive's density."""
+        return float(volume_fraction(self.slurry.solids_loading, ABRASIVES[self.slurry.abrasive].density))
+
+    @property
+    def grain_bulk_density(self) -> float:
+        """Bulk density of the grains of the granular slurry, kg/m^3: granular_density, or phi rho_a when it is 0."""
+        rho = self.slurry.granular_density
+        return rho if rho > 0 else self.solid_volume_fraction * ABRASIVES[self.slurry.abrasive].density
+
+    @property
+    def newtonian_viscosity(self) -> float:
+        """Viscosity of the Newtonian slurry, Pa s: slurry_viscosity, or Krieger-Dougherty of the loading when it is 0."""
+        eta = self.slurry.slurry_viscosity
+        return eta if eta > 0 else float(krieger_dougherty(self.solid_volume_fraction, self.slurry.carrier_viscosity))
 
     @property
     def grid_shape(self) -> tuple[int, int]:

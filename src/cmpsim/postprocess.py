@@ -53,6 +53,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "contact_pressure": lambda: st.p_contact,
         "fluid_shear_stress": lambda: ((1.0 - ar) * tsx, (1.0 - ar) * tsy),
         "relative_speed": lambda: np.hypot(dux, duy),
+        "contact_area_ratio": lambda: ar,
         "film_thickness": lambda: st.h,
     }
     rr = law.rate(**{name: fields[name]() for name in law.needs})

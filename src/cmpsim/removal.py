@@ -14,8 +14,8 @@ import numpy as np
 
 __all__ = ["slurry_shear_stress", "newtonian_shear_stress", "viscous_shear_stress", "contact_shear_stress", "removal_rate", "shear_power_removal_rate", "REMOVAL_LAWS"]
 
-#: Removal laws: the paper's (Runnels–Eyman) and the shear-power law.
-REMOVAL_LAWS = ("paper", "shear_power")
+#: Removal laws: the paper's (Runnels–Eyman), the shear-power law and the abrasive law (cmpsim.abrasion).
+REMOVAL_LAWS = ("paper", "shear_power", "abrasive")
 
 
 def slurry_shear_stress(p_abs, grad_p, h, du, grain, *, phi_fs, phi_fp):

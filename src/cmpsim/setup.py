@@ -90,9 +90,9 @@ def physical_setup(config: Config) -> PhysicalSetup:
         kinematics=kin,
         flow_factor_floor=c.flow_factor_floor,
         slurry_model=c.slurry_model,
-        viscosity=c.slurry_viscosity,
+        viscosity=c.newtonian_viscosity,
     )
-    p0 = float(granular_pressure(c.granular_density, c.diameter_gap_ratio, v, t=HAFF_T))
+    p0 = float(granular_pressure(c.grain_bulk_density, c.diameter_gap_ratio, v, t=HAFF_T))
     n_r, n_t = c.grid_shape
     grid = PolarGrid(0.5 * c.wafer_diameter, n_r, n_t)
     pad_model = models.pad_model(config)

@@ -22,6 +22,11 @@ __all__ = ["WaferProblem", "MODEL_VARIANTS"]
 MODEL_VARIANTS = ("lep", "elastic", "hydrodynamic")
 
 
+def _linear_count(name: str, doc: str) -> property:
+    """A counter of the problem's :class:`~cmpsim.reynolds.LinearSolveStats` (``self.linear``), readable and settable."""
+    return property(lambda self: getattr(self.linear, name), lambda self, value: setattr(self.linear, name, value), doc=doc)
+
+
 class WaferProblem:
     """One operating point of the wafer on the polar grid.
 
@@ -98,10 +103,9 @@ class WaferProblem:
             slurry = models.slurry_model(lubrication.slurry_model, cavitation, cavitation_pressure, ambient_pressure)
         if not (np.isfinite(applied_pressure) and applied_pressure > 0):
             raise ValueError(f"applied_pressure must be > 0 Pa; got {applied_pressure!r}")
-        if not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
-            raise ValueError(f"ambient granular pressure must be > 0 Pa; got {ambient_pressure!r}")
         if variant != "hydrodynamic" and pad is None:
             raise ValueError(f"model {variant!r} needs a PadSurface")
+        # the inputs as attributes (the same shape as any constructor's, e.g. calibration's _Problem)
         self.grid = grid
         self.dome_height = dome_height
         self.applied_pressure = applied_pressure
@@ -139,23 +143,8 @@ class WaferProblem:
         if variant != "hydrodynamic" and np.isfinite(pad.height_cutoff):
             self._contact_table = contact_table(pad, variant)
 
-    @property
-    def factorizations(self) -> int:
-        """Sparse factorisations so far (calls of ``solver``)."""
-        return self.linear.factorizations
-
-    @factorizations.setter
-    def factorizations(self, value: int) -> None:
-        self.linear.factorizations = value
-
-    @property
-    def back_substitutions(self) -> int:
-        """Solves with a factorisation so far (including refinement steps)."""
-        return self.linear.back_substitutions
-
-    @back_substitutions.setter
-    def back_substitutions(self, value: int) -> None:
-        self.linear.back_substitutions = value
+    factorizations = _linear_count("factorizations", "Sparse factorisations so far (calls of ``solver``).")
+    back_substitutions = _linear_count("back_substitutions", "Solves with a factorisation so far (including refinement steps).")
 
     def _counting_solver(self, A):
         self.linear.factorizations += 1

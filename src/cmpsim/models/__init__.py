@@ -9,7 +9,7 @@ input                     values -> class                                  proto
 ``pad_compliance``        :data:`PAD_MODELS` (rigid, winkler, layer)       :class:`~cmpsim.models.base.PadModel`
 ``slurry_model``          :data:`SLURRY_MODELS` (granular, newtonian)      :class:`~cmpsim.models.base.SlurryModel`
 ``cavitation``            :data:`CAVITATION_MODELS` (none, gumbel, jfo)    :class:`~cmpsim.models.base.CavitationModel`
-``removal_law``           :data:`REMOVAL_LAWS` (paper, shear_power)        :class:`~cmpsim.models.base.RemovalLaw`
+``removal_law``           :data:`REMOVAL_LAWS` (paper, ..., abrasive)      :class:`~cmpsim.models.base.RemovalLaw`
 ``carrier``               :data:`CARRIERS` (rigid)                         :class:`~cmpsim.models.base.CarrierModel`
 ========================  ==============================================  =====================================
 
@@ -25,7 +25,7 @@ from ..cavitation import VACUUM_GAUGE_PRESSURE
 from .base import CarrierModel, CavitationModel, PadModel, RemovalLaw, SlurryModel
 from .carriers import RigidCarrier
 from .pads import LayerPad, RigidPad, WinklerPad
-from .removal_laws import PaperRemovalLaw, ShearPowerRemovalLaw
+from .removal_laws import AbrasiveRemovalLaw, PaperRemovalLaw, ShearPowerRemovalLaw
 from .slurries import GranularSlurry, GumbelCavitation, JFOCavitation, NewtonianSlurry, NoCavitation
 
 __all__ = [
@@ -53,7 +53,7 @@ SLURRY_MODELS: dict[str, type] = {"granular": GranularSlurry, "newtonian": Newto
 #: ``cavitation`` -> cavitation model class (of the Newtonian slurry).
 CAVITATION_MODELS: dict[str, type] = {"none": NoCavitation, "gumbel": GumbelCavitation, "jfo": JFOCavitation}
 #: ``removal_law`` -> removal law class.
-REMOVAL_LAWS: dict[str, type] = {"paper": PaperRemovalLaw, "shear_power": ShearPowerRemovalLaw}
+REMOVAL_LAWS: dict[str, type] = {"paper": PaperRemovalLaw, "shear_power": ShearPowerRemovalLaw, "abrasive": AbrasiveRemovalLaw}
 #: ``carrier`` -> carrier model class.
 CARRIERS: dict[str, type] = {"rigid": RigidCarrier}
 

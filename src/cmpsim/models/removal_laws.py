@@ -10,11 +10,17 @@ A new law (e.g. an abrasive-particle law) adds a class here and an entry in the 
 
 from __future__ import annotations
 
+import math
+import warnings
+
 import numpy as np
 
+from ..abrasion import AbrasiveContact, abrasive_removal_rate
+from ..kinetics import chemical_rate, flash_temperature, series_rate
+from ..materials import ABRASIVES, FILMS
 from ..removal import removal_rate, shear_power_removal_rate
 
-__all__ = ["REMOVAL_FIELDS", "PaperRemovalLaw", "ShearPowerRemovalLaw"]
+__all__ = ["REMOVAL_FIELDS", "PaperRemovalLaw", "ShearPowerRemovalLaw", "AbrasiveRemovalLaw", "TwoStepKinetics", "abrasive_contact"]
 
 #: The fields of a solved state a removal law may ask for (all at the cell centres, SI).
 REMOVAL_FIELDS = {
@@ -23,6 +29,7 @@ REMOVAL_FIELDS = {
     "contact_pressure": "nominal pad-summit contact pressure p_c, Pa",
     "fluid_shear_stress": "(tau_x, tau_y) of the slurry alone, (1 - a_r) tau_f, Pa",
     "relative_speed": "local sliding speed |u_pad - u_wafer|, m/s",
+    "contact_area_ratio": "real over nominal contact area of the pad summits A_r/A_n (elastic + elastoplastic + plastic)",
     "film_thickness": "h, m",
 }
 
@@ -65,3 +72,83 @@ class ShearPowerRemovalLaw:
         return shear_power_removal_rate(
             contact_pressure, fluid_shear_stress, relative_speed, self.coefficient, self.friction_coefficient, self.fluid_shear_weight
         )
+
+
+def abrasive_contact(config) -> AbrasiveContact:
+    """The particles, pad and film of the abrasive law (:mod:`cmpsim.abrasion`) of a Config.
+
+    The pad presses an embedded particle with p_pad = min(H_pad, 4 E'_pad / (3 pi)), E'_pad the
+    pad-particle effective modulus; the particle-film contact takes E* from both bodies and the
+    hardness and K of the softer one; the film takes its Hertz compliance share of the
+    interference (docs/model.md, section 13e).
+    """
+    c = config
+    a, f = ABRASIVES[c.abrasive], FILMS[c.film]
+    pad_e = 1.0 / ((1.0 - c.pad_poisson**2) / c.pad_modulus + a.reduced_compliance)
+    soft = f if f.hardness <= a.hardness else a
+    compliance = a.reduced_compliance + f.reduced_compliance
+    return AbrasiveContact(
+        diameter=c.particle_diameter,
+        diameter_std=c.particle_size_std,
+        volume_fraction=c.solid_volume_fraction,
+        pad_pressure=min(c.pad_hardness, 4.0 * pad_e / (3.0 * math.pi)),
+        e_star=1.0 / compliance,
+        hardness=soft.hardness,
+        k_factor=0.454 + 0.41 * soft.poisson,
+        film_share=f.reduced_compliance / compliance,
+        efficiency=c.abrasion_efficiency,
+    )
+
+
+class TwoStepKinetics:
+    """A thermally activated chemical step in series with the mechanical rate (:mod:`cmpsim.kinetics`).
+
+    RR = RR_c RR_m / (RR_c + RR_m), RR_c = c_0 exp(-(E_a/R_g)(1/T - 1/T_0)), T = T_0 + beta mu p_c |du|.
+    """
+
+    def __init__(self, reference_rate: float, activation_energy: float, heating_coefficient: float, temperature: float, friction_coefficient: float):
+        self.reference_rate = reference_rate
+        self.activation_energy = activation_energy
+        self.heating_coefficient = heating_coefficient
+        self.temperature = temperature
+        self.friction_coefficient = friction_coefficient
+
+    @classmethod
+    def from_config(cls, config) -> "TwoStepKinetics":
+        c = config
+        return cls(c.chemical_rate, c.activation_energy, c.flash_heating_coefficient, c.slurry_temperature, c.friction_coefficient)
+
+    def rate(self, mechanical, contact_pressure, relative_speed) -> np.ndarray:
+        """The two-step rate, m/s, from the mechanical rate (m/s) and the local friction power."""
+        t = flash_temperature(self.temperature, self.friction_coefficient, contact_pressure, relative_speed, self.heating_coefficient)
+        return series_rate(chemical_rate(t, self.reference_rate, self.activation_energy, self.temperature), mechanical)
+
+
+class AbrasiveRemovalLaw:
+    """Abrasive particles trapped in the pad's real contact plough the film (:func:`cmpsim.abrasion.abrasive_removal_rate`),
+    with the chemical step in series for ``removal_kinetics = 'two_step'`` (docs/model.md, section 13e)."""
+
+    name = "abrasive"
+    needs = ("contact_pressure", "contact_area_ratio", "relative_speed")
+
+    def __init__(self, contact: AbrasiveContact, kinetics: TwoStepKinetics | None = None):
+        self.contact = contact
+        self.kinetics = kinetics
+
+    @classmethod
+    def from_config(cls, config) -> "AbrasiveRemovalLaw":
+        kinetics = KINETICS[config.removal_kinetics]
+        return cls(abrasive_contact(config), kinetics and kinetics.from_config(config))
+
+    def rate(self, contact_pressure, contact_area_ratio, relative_speed) -> np.ndarray:
+        """Removal rate, m/s (0 without abrasive, with a RuntimeWarning saying so)."""
+        if self.contact.volume_fraction == 0:
+            warnings.warn("solids_loading = 0: no abrasive particles, so the abrasive removal law removes nothing (removal rate 0)", RuntimeWarning, stacklevel=2)
+        rr = abrasive_removal_rate(contact_pressure, contact_area_ratio, relative_speed, self.contact).rate
+        if self.kinetics is not None:
+            rr = self.kinetics.rate(rr, contact_pressure, relative_speed)
+        return rr
+
+
+#: ``removal_kinetics`` -> the step in series with the mechanical rate (None: the mechanical rate alone).
+KINETICS: dict[str, type | None] = {"mechanical": None, "two_step": TwoStepKinetics}

@@ -221,6 +221,8 @@ class GranularSlurry:
     takes_cavitation = False
 
     def __init__(self, ambient_pressure: float):
+        if not (np.isfinite(ambient_pressure) and ambient_pressure > 0):
+            raise ValueError(f"ambient granular pressure must be > 0 Pa; got {ambient_pressure!r}")
         self.p0 = float(ambient_pressure)
         self.cavitation = NoCavitation()
 

@@ -233,16 +233,30 @@ def _close_within(close, seconds: float) -> bool:
     return not thread.is_alive() and not box
 
 
-def _kill_child_processes() -> int:
-    """SIGKILL every process this one started (the local cluster's workers); how many."""
+def _child_pids() -> set[int]:
+    """The pids of every process this one started and that still runs."""
     import psutil  # a dependency of dask.distributed
 
-    children = psutil.Process().children(recursive=True)
-    for child in children:
+    return {c.pid for c in psutil.Process().children(recursive=True)}
+
+
+def _kill_new_child_processes(before: set[int]) -> int:
+    """SIGKILL the processes this one started since ``before`` was taken (the local cluster's
+    workers, restarted ones included); how many. Older children (a caller's own processes) and
+    multiprocessing's resource tracker, which outlives the cluster, are left alone."""
+    import psutil
+
+    victims = []
+    for child in psutil.Process().children(recursive=True):
+        if child.pid in before:
+            continue
         with contextlib.suppress(psutil.Error):
+            if any("resource_tracker" in part for part in child.cmdline()):
+                continue
             child.kill()
-    psutil.wait_procs(children, timeout=5)
-    return len(children)
+            victims.append(child)
+    psutil.wait_procs(victims, timeout=5)
+    return len(victims)
 
 
 def _with_client(scheduler, workers, chains, done, fn):
@@ -271,6 +285,7 @@ def _with_client(scheduler, workers, chains, done, fn):
         finally:
             if client is not None:
                 client.close()
+    before = _child_pids()
     cluster = local_cluster(_local_workers(workers, chains, done))
     client = None
     try:
@@ -280,7 +295,7 @@ def _with_client(scheduler, workers, chains, done, fn):
         closed = client is None or _close_within(client.close, INTERRUPT_CLOSE_SECONDS)
         closed = _close_within(cluster.close, INTERRUPT_CLOSE_SECONDS) and closed
         if not closed:
-            _kill_child_processes()
+            _kill_new_child_processes(before)
         client = cluster = None
         raise
     finally:

@@ -20,12 +20,12 @@ __all__ = ["FLOORS", "UTILITIES", "MODEL_OPTIONS", "source_modules", "imports_of
 
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "padstack", "uniformity")),
+    ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "abrasion", "kinetics", "materials", "padstack", "uniformity")),
     ("discretisation", "the polar grid and its face operators; the sparse Reynolds and cavitation systems", ("grid", "reynolds", "cavitation")),
     ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection; load balance and Newton on the wafer position", ("state", "compliance", "models", "wafer", "loadbalance", "equilibrium")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
-    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "testing")),
+    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.
@@ -148,7 +148,7 @@ def import_cycles(root: Path, top_level_only: bool = True) -> list[list[str]]:
 MODEL_OPTIONS = ("pad_compliance", "slurry_model", "cavitation", "removal_law", "carrier", "removal_kinetics", "abrasive", "film")
 #: The modules allowed to read an option's name: where the inputs are checked and where the
 #: models are picked by name (the registry).
-OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models", "cmpsim.models.registry")
+OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models")
 
 
 def _option_ref(node: ast.AST) -> bool:

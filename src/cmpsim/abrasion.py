@@ -1,0 +1,285 @@
+"""Abrasive removal: particles trapped in the pad's real contact area plough the film.
+
+Pure vectorised kernels (SI units) of the removal law ``removal_law = "abrasive"``, after Luo &
+Dornfeld (IEEE Trans. Semicond. Manuf. 14, 112 (2001); 16, 469 (2003)), Zhao & Chang (Wear 252,
+220 (2002)) and Jeng & Huang (J. Electrochem. Soc. 152, G80 (2005)). The chain, derived in
+``docs/model.md`` ("Abrasive removal"), at each point of the wafer:
+
+1. **Particles in the real contact.** A slurry of solid volume fraction phi and a (log-normal)
+   number distribution of diameters x holds N_v = phi / <pi x^3 / 6> particles per unit volume.
+   The particles trapped between a pad summit in contact and the wafer are those of the layer
+   as thick as their own diameter (Luo & Dornfeld 2001): n(x) = N_v f(x) x per unit real
+   contact area. They cover a share c = sum n pi x^2 / 4 = (3/2) phi of it.
+2. **Load per particle.** The soft pad flows around each trapped particle and presses it with
+   its flow pressure p_pad = min(H_pad, 4 E_pad' / (3 pi)) (the lesser of the pad hardness and
+   the Hertz mean pressure at an interference of one particle radius) over the embedded section:
+   F = p_pad pi (2 r e - e^2), e the embedding (e <= r; p_pad pi r^2 beyond). Where the particles
+   cannot carry the summits' mean real contact pressure p_r = p_c / (A_r/A_n) alone, the pad
+   touches the wafer between them and each is embedded by its diameter (g = 0); otherwise the
+   pad rests on the largest particles at the gap g > 0 where sum n F(x - g) = p_r (the size
+   distribution then decides which particles work: Luo & Dornfeld 2003).
+3. **Indentation into the film.** A sphere of radius x/2 pressed on the film with force F sinks
+   by the interference omega of the elastic (Hertz) / elastoplastic (Zhao–Maietta–Chang) /
+   plastic law of the pad summits (``cmpsim.contact``), with the particle-film effective modulus
+   E* and the hardness and K = 0.454 + 0.41 nu of the softer body; the film takes the share
+   C_f / (C_f + C_a) of it (C = (1 - nu^2)/E, each body's Hertz compliance): delta = omega C_f / (C_f + C_a).
+4. **Ploughed volume.** Sliding with the pad at |u_pad - u_wafer|, the particle sweeps the
+   circular segment of depth delta of its own section: A_g = r^2 (theta - sin theta cos theta),
+   cos theta = 1 - delta / r. A share k_a (``abrasion_efficiency``) of the ploughed groove
+   leaves as debris (three-body abrasion).
+5. **Rate.** RR = k_a (A_r/A_n) |du| sum n A_g (m/s).
+
+With s = 1 the per-particle quantities do not depend on the load, so RR = C (A_r/A_n) |du|:
+wherever the real contact area grows in proportion to the contact load (Greenwood–Williamson
+summits with exponential heights, or fully plastic summits: A_r = P/H), this is Preston's law
+RR = k_p p_c |du| with k_p = C / p_r.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = [
+    "AbrasiveContact",
+    "AbrasionResult",
+    "size_nodes",
+    "sphere_load",
+    "interference",
+    "groove_area",
+    "pad_force",
+    "pad_gap",
+    "abrasive_removal_rate",
+    "PLASTIC_RATIO",
+]
+
+#: omega_p / omega_e of the Zhao–Maietta–Chang law (as in cmpsim.contact).
+PLASTIC_RATIO = 54.0
+#: Gauss–Hermite nodes of the log-normal size distribution.
+SIZE_NODES = 16
+_BISECTIONS = 60
+
+
+@dataclass(frozen=True)
+class AbrasiveContact:
+    """The particles, the pad that presses them and the film they plough (SI).
+
+    Parameters
+    ----------
+    diameter : float
+        Number-mean particle diameter, m (> 0).
+    diameter_std : float
+        Standard deviation of the number distribution of diameters, m (>= 0; 0: all alike).
+    volume_fraction : float
+        Solid volume fraction phi of the slurry, in [0, 1).
+    pad_pressure : float
+        Largest pressure p_pad of the pad on an embedded particle, Pa (> 0).
+    e_star : float
+        Particle-film effective modulus E*, 1/E* = C_a + C_f, Pa.
+    hardness : float
+        Hardness of the softer of particle and film, Pa.
+    k_factor : float
+        K = 0.454 + 0.41 nu of the softer body.
+    film_share : float
+        C_f / (C_a + C_f): the share of the interference taken by the film, in (0, 1].
+    efficiency : float
+        k_a: share of the ploughed groove removed, in [0, 1].
+    """
+
+    diameter: float
+    diameter_std: float
+    volume_fraction: float
+    pad_pressure: float
+    e_star: float
+    hardness: float
+    k_factor: float
+    film_share: float
+    efficiency: float
+
+    def __post_init__(self):
+        checks = (
+            ("diameter", self.diameter > 0, "(0, inf) m"),
+            ("diameter_std", self.diameter_std >= 0, "[0, inf) m"),
+            ("volume_fraction", 0 <= self.volume_fraction < 1, "[0, 1)"),
+            ("pad_pressure", self.pad_pressure > 0, "(0, inf) Pa"),
+            ("e_star", self.e_star > 0, "(0, inf) Pa"),
+            ("hardness", self.hardness > 0, "(0, inf) Pa"),
+            ("k_factor", 0 < self.k_factor <= 1, "(0, 1]"),
+            ("film_share", 0 < self.film_share <= 1, "(0, 1]"),
+            ("efficiency", 0 <= self.efficiency <= 1, "[0, 1]"),
+        )
+        for name, ok, rng in checks:
+            if not (ok and np.isfinite(getattr(self, name))):
+                raise ValueError(f"{name} must be in {rng}; got {getattr(self, name)!r}")
+
+    @property
+    def coverage(self) -> float:
+        """Share of the real contact area covered by trapped particles, c = (3/2) phi."""
+        return 1.5 * self.volume_fraction
+
+
+@dataclass(frozen=True)
+class AbrasionResult:
+    """Removal rate and the particle-level state at each point (arrays shaped like the inputs).
+
+    ``rate`` m/s; ``active_particles`` trapped particles per unit nominal area, 1/m^2;
+    ``gap`` g between pad and wafer in the summit contacts, m (0: the pad touches the wafer);
+    ``particle_load`` F of a particle of the mean diameter, N;
+    ``depth`` delta of a particle of the mean diameter, m.
+    """
+
+    rate: np.ndarray
+    active_particles: np.ndarray
+    gap: np.ndarray
+    particle_load: np.ndarray
+    depth: np.ndarray
+
+
+def size_nodes(mean: float, std: float, n: int = SIZE_NODES):
+    """Diameters x_i (m) and number weights w_i (sum 1) of the log-normal distribution of given mean and std.
+
+    ln x is normal with sigma^2 = ln(1 + (std/mean)^2) and mu = ln(mean) - sigma^2/2 (moment
+    matched), integrated by Gauss–Hermite quadrature; ``std = 0`` gives the single node (mean, 1).
+    """
+    if std == 0:
+        return np.array([float(mean)]), np.array([1.0])
+    s2 = np.log1p((std / mean) ** 2)
+    t, w = np.polynomial.hermite_e.hermegauss(n)
+    return np.exp(np.log(mean) - 0.5 * s2 + np.sqrt(s2) * t), w / w.sum()
+
+
+def _omega_e(radius, e_star, hardness, k):
+    return (3.0 * np.pi * k * hardness / (4.0 * e_star)) ** 2 * radius
+
+
+def sphere_load(omega, radius, e_star, hardness, k):
+    """Force (N) pressing a sphere of ``radius`` (m) into a flat by the interference ``omega`` (m).
+
+    Hertz below omega_e = (3 pi K H / (4 E*))^2 R (paper eq. 27), Zhao–Maietta–Chang between
+    omega_e and 54 omega_e, fully plastic 2 pi R omega H above: the per-summit law of
+    :mod:`cmpsim.contact` (continuous at both boundaries).
+    """
+    w = np.asarray(omega, dtype=float)
+    R = np.asarray(radius, dtype=float)
+    we = _omega_e(R, e_star, hardness, k)
+    wp = PLASTIC_RATIO * we
+    wc = np.clip(w, we, wp)
+    u = (wc - we) / (wp - we)
+    area_ep = np.pi * R * wc * (1.0 + u * u * (3.0 - 2.0 * u))
+    p_ep = hardness * (1.0 - (1.0 - k) * np.log(wp / wc) / np.log(PLASTIC_RATIO))
+    hertz = 4.0 / 3.0 * e_star * np.sqrt(R) * np.maximum(w, 0.0) ** 1.5
+    return np.where(w < we, hertz, np.where(w < wp, p_ep * area_ep, 2.0 * np.pi * R * w * hardness))
+
+
+def interference(load, radius, e_star, hardness, k):
+    """The interference omega (m) at which :func:`sphere_load` equals ``load`` (N); 0 for no load.
+
+    Closed form in the elastic and plastic ranges; bisection on ln omega between omega_e and
+    54 omega_e (the law is increasing there) to machine precision.
+    """
+    F = np.asarray(load, dtype=float)
+    R = np.broadcast_to(np.asarray(radius, dtype=float), F.shape)
+    we = _omega_e(R, e_star, hardness, k)
+    wp = PLASTIC_RATIO * we
+    f_e = sphere_load(we * (1 - 1e-15), R, e_star, hardness, k)
+    f_p = sphere_load(wp, R, e_star, hardness, k)
+    elastic = (3.0 * np.maximum(F, 0.0) / (4.0 * e_star * np.sqrt(R))) ** (2.0 / 3.0)
+    plastic = F / (2.0 * np.pi * R * hardness)
+    lo, hi = np.log(we), np.log(wp)
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        below = sphere_load(np.exp(mid), R, e_star, hardness, k) < F
+        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+    return np.where(F < f_e, elastic, np.where(F < f_p, np.exp(0.5 * (lo + hi)), plastic))
+
+
+def groove_area(radius, depth):
+    """Section of the groove (m^2) a sphere of ``radius`` ploughs at ``depth`` (m), 0 <= depth <= 2 radius.
+
+    The circular segment r^2 (theta - sin theta cos theta), cos theta = 1 - depth/r, with its
+    series (4/3) sqrt(2 r) depth^(3/2) (1 - ...) written through theta for small depth (no cancellation).
+    """
+    r = np.asarray(radius, dtype=float)
+    d = np.asarray(depth, dtype=float)
+    theta = 2.0 * np.arcsin(np.sqrt(np.clip(d / (2.0 * r), 0.0, 1.0)))
+    small = theta < 1e-2
+    t2 = theta * theta
+    series = theta**3 * (2.0 / 3.0 - t2 * (2.0 / 15.0 - t2 * (4.0 / 315.0)))
+    exact = theta - np.sin(theta) * np.cos(theta)
+    return r * r * np.where(small, series, exact)
+
+
+def pad_force(embedding, radius, pad_pressure):
+    """Force (N) of the pad on a particle of ``radius`` (m) embedded ``embedding`` (m) into it.
+
+    The pad flows around the particle at its flow pressure p_pad over the embedded section:
+    F = p_pad pi (2 r e - e^2) for e <= r, p_pad pi r^2 beyond (the particle is then held
+    over its whole projected area); 0 for e <= 0. Continuous and increasing in e.
+    """
+    e = np.clip(np.asarray(embedding, dtype=float), 0.0, np.asarray(radius, dtype=float))
+    return pad_pressure * np.pi * e * (2.0 * np.asarray(radius) - e)
+
+
+def pad_gap(real_pressure, diameters, counts, pad_pressure):
+    """Gap g (m) between the pad surface and the wafer inside a summit contact.
+
+    g = 0 (the pad touches the wafer between the particles, each embedded by its whole
+    diameter) when the particles cannot carry the real contact pressure p_r alone; otherwise the
+    g > 0 at which they carry it: sum_i n_i F(x_i - g) = p_r (:func:`pad_force`), found by
+    bisection (the sum falls as g grows). ``counts`` n_i per unit real area by size class
+    (last axis), ``real_pressure`` p_r per point.
+    """
+    p_r = np.asarray(real_pressure, dtype=float)[..., None]
+    x = np.asarray(diameters, dtype=float)
+
+    def carried(g):
+        return np.sum(counts * pad_force(x - g, 0.5 * x, pad_pressure), axis=-1, keepdims=True)
+
+    lo = np.zeros_like(p_r)
+    hi = np.full_like(p_r, x.max())
+    dense = carried(lo) > p_r
+    for _ in range(_BISECTIONS):
+        mid = 0.5 * (lo + hi)
+        over = carried(mid) > p_r
+        lo, hi = np.where(over, mid, lo), np.where(over, hi, mid)
+    return np.where(dense, 0.5 * (lo + hi), 0.0)[..., 0]
+
+
+def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive: AbrasiveContact) -> AbrasionResult:
+    """Mechanical removal rate of the abrasive law at each point, m/s (module docstring, steps 1-5).
+
+    Parameters
+    ----------
+    contact_pressure : array
+        Nominal contact pressure of the pad summits p_c, Pa.
+    area_ratio : array
+        Real contact area over nominal area A_r/A_n of the summits, dimensionless.
+    sliding_speed : array
+        |u_pad - u_wafer|, m/s.
+    abrasive : AbrasiveContact
+
+    Returns
+    -------
+    AbrasionResult
+        Zero rate wherever there is no contact or no abrasive (phi = 0): no particle, no removal.
+    """
+    a = abrasive
+    pc = np.asarray(contact_pressure, dtype=float)
+    ar = np.asarray(area_ratio, dtype=float)
+    speed = np.asarray(sliding_speed, dtype=float)
+    x, w = size_nodes(a.diameter, a.diameter_std)
+    n_v = a.volume_fraction / np.sum(w * np.pi * x**3 / 6.0)  # particles per unit volume
+    n_i = n_v * w * x  # per unit real contact area, by size class (Luo & Dornfeld 2001)
+    in_contact = ar > 0
+    p_r = np.where(in_contact, pc / np.where(in_contact, ar, 1.0), 0.0)
+    gap = np.where(in_contact, pad_gap(p_r, x, n_i, a.pad_pressure), 0.0)
+    load = pad_force(x - gap[..., None], 0.5 * x, a.pad_pressure)  # (points, size classes)
+    omega = interference(load, 0.5 * x, a.e_star, a.hardness, a.k_factor)
+    depth = a.film_share * omega
+    swept = np.sum(n_i * groove_area(0.5 * x, depth), axis=-1)  # m^2 per unit real area
+    rate = np.where(in_contact, a.efficiency * ar * speed * swept, 0.0)
+    active = ar * np.sum(n_i * (x > gap[..., None]), axis=-1)
+    f_mean = np.where(in_contact, pad_force(a.diameter - gap, 0.5 * a.diameter, a.pad_pressure), 0.0)
+    d_mean = a.film_share * interference(f_mean, 0.5 * a.diameter, a.e_star, a.hardness, a.k_factor)
+    return AbrasionResult(rate=rate, active_particles=active, gap=gap, particle_load=f_mean, depth=d_mean)

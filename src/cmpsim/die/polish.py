@@ -1,0 +1,446 @@
+"""One die, and every die of a wafer: :func:`simulate` and :func:`simulate_wafer`.
+
+The blanket removal rate of a die comes from a wafer-scale solve (:func:`cmpsim.solve`): its
+wafer-mean removal rate for one die, the rotation-averaged removal-rate profile at each die's
+radius for a wafer of dies (the wafer turns under the carrier-frame maps, so a die at radius r
+loses the ring mean of the rate at r; docs/model.md section 15). Every local rate of the die
+model is a blanket rate times a pressure ratio, so a die polished at rate K for a time t is in
+the state of the reference die polished at K_ref for t K / K_ref: a wafer of dies costs one
+wafer solve and one die evolution, read at each die's equivalent time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .density import GaussianWeighting, PadWeighting, effective_density
+from .evolution import DieEvolution
+from .layout import BUILTIN_LAYOUTS, Layout, builtin_layout, read_layout
+from .pad import pad_stack, planarization_length_from_pad
+from .process import DieProcess
+from .stacks import film_stack
+
+__all__ = ["simulate", "simulate_wafer", "DieResult", "WaferDies", "load_layout", "die_sites", "blanket_rates"]
+
+
+def load_layout(layout, cell_size: float | None = None) -> Layout:
+    """A :class:`Layout` from a Layout, a built-in die name (``cell_size`` m, default 50 um) or a CSV path."""
+    if isinstance(layout, Layout):
+        return layout
+    name = str(layout)
+    if name in BUILTIN_LAYOUTS:
+        return builtin_layout(name, cell_size or 50e-6)
+    if cell_size is not None:
+        raise ValueError("cell_size applies to the built-in dies only: a layout file gives its own")
+    return read_layout(name)
+
+
+def _finite(v):
+    return None if v is None or not math.isfinite(v) else float(v)
+
+
+def _config(config):
+    from ..config import Config
+
+    return config if config is not None else Config.default()
+
+
+def _weighting(config, planarization_length, weighting):
+    derived = planarization_length_from_pad(config)
+    length = derived if planarization_length is None else float(planarization_length)
+    if weighting == "gaussian":
+        return GaussianWeighting(length), derived
+    if weighting == "pad":
+        if planarization_length is not None:
+            raise ValueError("weighting = 'pad' takes its length from the pad stack: leave planarization_length unset")
+        return PadWeighting(pad_stack(config), derived), derived
+    raise ValueError(f"weighting must be 'gaussian' or 'pad'; got {weighting!r}")
+
+
+@dataclass
+class DieResult:
+    """A die after polishing for ``time`` (s) at ``blanket_rate`` (m/s). Heights from the original field oxide top (m)."""
+
+    layout: Layout
+    process: DieProcess
+    time: float
+    blanket_rate: float
+    planarization_length: float
+    planarization_length_from_pad: float
+    weighting: str
+    effective_density: np.ndarray = field(repr=False)
+    evolution: DieEvolution = field(repr=False)
+
+    @property
+    def time_to_planarize(self) -> float:
+        """Time (s) by which every cell's step falls below ``planarity`` (copper: in the bulk stage, or its field clears), also when later than :attr:`time`."""
+        return float(self.evolution.t_planar.max())
+
+    @property
+    def time_to_clear(self) -> float:
+        """Copper: time (s) by which the barrier clears from the field of every cell (also when later than :attr:`time`); oxide: the time to planarize."""
+        return float(self.evolution.t_clear.max())
+
+    def regions(self) -> list[dict]:
+        """Per block or line array, at its measurement site (the cell deepest inside it): density, line_width, step_height, dishing, erosion (SI)."""
+        ev = self.evolution
+        x, y = self.layout.coordinates()
+        out = []
+        for r in self.layout.regions():
+            iy, ix = r.site
+            out.append(
+                {
+                    "index": r.index,
+                    "density": r.density,
+                    "line_width": r.line_width,
+                    "pitch": r.pitch,
+                    "x": float(x[ix]),
+                    "y": float(y[iy]),
+                    "effective_density": float(self.effective_density[iy, ix]),
+                    "step_height": _finite(float(ev.step_height[iy, ix])),
+                    "dishing": _finite(float(ev.dishing[iy, ix])),
+                    "erosion": _finite(float(ev.erosion[iy, ix])),
+                    "time_to_planarize": _finite(float(ev.t_planar[iy, ix])),
+                    "time_to_clear": _finite(float(ev.t_clear[iy, ix])) if ev.stack.metal else None,
+                }
+            )
+        return out
+
+    def to_dict(self) -> dict:
+        """The object of ``cmpsim die --json`` (SI units; null where a quantity does not apply or was not reached)."""
+        ev = self.evolution
+        return {
+            "layout": self.layout.name,
+            "process": self.process.kind,
+            "time": self.time,
+            "blanket_rate": self.blanket_rate,
+            "planarization_length": self.planarization_length,
+            "planarization_length_from_pad": self.planarization_length_from_pad,
+            "weighting": self.weighting,
+            "film": self.evolution.stack.film,
+            "time_to_planarize": _finite(self.time_to_planarize),
+            "time_to_clear": _finite(self.time_to_clear) if ev.stack.metal else None,
+            "step_height_max": _finite(float(np.nanmax(ev.step_height))) if np.isfinite(ev.step_height).any() else None,
+            "dishing_max": _max(ev.dishing),
+            "erosion_max": _max(ev.erosion),
+            "regions": self.regions(),
+            "inputs": self.process.to_dict(),
+            "units": dict(_UNITS),
+        }
+
+    def dataset(self):
+        """The die maps as an ``xarray.Dataset`` on x, y (m) with CF attributes (units, long_name)."""
+        ev = self.evolution
+        x, y = self.layout.coordinates()
+        finite = {"time_to_planarize": ev.t_planar, "time_to_clear": ev.t_clear}
+        maps = {"density": self.layout.density, "effective_density": self.effective_density, "line_width": self.layout.widths(),
+                "upper_height": ev.za, "lower_height": ev.zb, "mean_height": ev.mean_height, "step_height": ev.step_height,
+                "dishing": ev.dishing, "erosion": ev.erosion, **{k: np.where(np.isfinite(v), v, np.nan) for k, v in finite.items()}}
+        coords = {"x": ("x", x, {"units": "m", "long_name": "position on the die", "axis": "X"}),
+                  "y": ("y", y, {"units": "m", "long_name": "position on the die", "axis": "Y"})}
+        scalars = {"time": self.time, "blanket_rate": self.blanket_rate, "planarization_length": self.planarization_length,
+                   "planarization_length_from_pad": self.planarization_length_from_pad}
+        ds = _cf_dataset(("y", "x"), maps, MAP_OUTPUTS, scalars, coords, f"cmpsim die: {self.layout.name}, {self.process.kind}")
+        ds.attrs["references"] = "Stine et al., IEEE TSM 11, 129 (1998); Ouma et al., IEEE TSM 15, 232 (2002); docs/model.md section 18"
+        return ds
+
+    def plot(self):
+        """Maps: layout density, effective density, final mean surface height, step height or dishing. A matplotlib Figure."""
+        import matplotlib.pyplot as plt
+
+        ev = self.evolution
+        x, y = self.layout.coordinates()
+        ext = [0, x[-1] + x[0], 0, y[-1] + y[0]]
+        ext = [v * 1e3 for v in ext]
+        last = ("dishing", ev.dishing) if ev.stack.metal else ("step height", ev.step_height)
+        panels = [("local density", self.layout.density, "1"), ("effective density", self.effective_density, "1"),
+                  ("mean surface height", ev.mean_height * 1e9, "nm"), (last[0], last[1] * 1e9, "nm")]
+        fig, axes = plt.subplots(2, 2, figsize=(10, 8.4), layout="constrained")
+        for ax, (title, data, unit) in zip(axes.flat, panels):
+            im = ax.imshow(data, origin="lower", extent=ext, cmap="viridis", interpolation="nearest")
+            ax.set_title(title, fontsize=10)
+            ax.set_xlabel("x (mm)")
+            ax.set_ylabel("y (mm)")
+            fig.colorbar(im, ax=ax, label=f"{title} ({unit})")
+        fig.suptitle(f"die {self.layout.name!r}, {self.process.kind}, t = {self.time:.0f} s, K = {self.blanket_rate * 6e10:.0f} nm/min, "
+                     f"PL = {self.planarization_length * 1e3:.2f} mm")
+        return fig
+
+
+def _cf_dataset(dims, arrays, table, scalars, coords, title):
+    """An xarray Dataset of arrays on ``dims`` and 0-d scalars, with ``units`` and ``long_name`` from ``table`` or :data:`SCALAR_OUTPUTS`."""
+    import xarray as xr
+
+    from .._version import __version__
+
+    def attrs(name):
+        unit, long = table.get(name) or SCALAR_OUTPUTS[name]
+        return {"units": unit, "long_name": long}
+
+    ds = xr.Dataset({k: (dims, np.asarray(v, dtype=float), attrs(k)) for k, v in arrays.items()}, coords=coords)
+    for k, v in scalars.items():
+        ds[k] = ((), float(v), attrs(k))
+    ds.attrs.update(Conventions="CF-1.11", title=title, source=f"cmpsim {__version__}")
+    return ds
+
+
+def _max(a):
+    return float(np.nanmax(a)) if np.isfinite(a).any() else None
+
+
+#: The die maps of :meth:`DieResult.dataset`: name -> (SI unit, long name).
+MAP_OUTPUTS = {
+    "density": ("1", "local pattern density (area fraction of the lines)"),
+    "effective_density": ("1", "effective pattern density seen by the pad"),
+    "line_width": ("m", "line width"),
+    "upper_height": ("m", "height of level A (oxide: over the lines; copper: the field) above the original field oxide top"),
+    "lower_height": ("m", "height of level B (oxide: over the spaces; copper: the lines) above the original field oxide top"),
+    "mean_height": ("m", "area-weighted mean surface height of the cell"),
+    "step_height": ("m", "step height between the two levels"),
+    "dishing": ("m", "copper dishing: depth of the line below the cleared field"),
+    "erosion": ("m", "field oxide lost below its original top"),
+    "time_to_planarize": ("s", "time at which the cell's step fell below the planarity threshold"),
+    "time_to_clear": ("s", "time at which the cell cleared (copper: barrier off the field)"),
+}
+#: The scalars of a die run: name -> (SI unit, long name).
+SCALAR_OUTPUTS = {
+    "time": ("s", "polishing time"),
+    "blanket_rate": ("m s-1", "blanket removal rate of the die"),
+    "planarization_length": ("m", "planarization length used"),
+    "planarization_length_from_pad": ("m", "planarization length derived from the pad stack"),
+}
+#: The per-die outputs of :meth:`WaferDies.dataset`: name -> (SI unit, long name).
+WAFER_OUTPUTS = {
+    "x": ("m", "die centre, x"),
+    "y": ("m", "die centre, y"),
+    "blanket_rate": ("m s-1", "rotation-averaged blanket removal rate at the die centre"),
+    "time_to_clear": ("s", "time to clear the die (copper: barrier off every field; oxide: planarized)"),
+    "time_to_planarize": ("s", "time by which every cell of the die planarized"),
+    "dishing_max": ("m", "largest copper dishing on the die"),
+    "erosion_max": ("m", "largest oxide erosion on the die"),
+    "step_height_max": ("m", "largest step height on the die"),
+}
+
+#: The unit of every key of the JSON of a die run (``"units"`` of :meth:`DieResult.to_dict`).
+_UNITS = {k: unit for table in (MAP_OUTPUTS, SCALAR_OUTPUTS, WAFER_OUTPUTS) for k, (unit, _) in table.items()} | {"pitch": "m", "wafer_diameter": "m"}
+
+
+def _end_point(ev: DieEvolution) -> float:
+    """Polish until every cell has planarized (oxide) or cleared (copper); return that time (s)."""
+    chunk = max(ev.stack.end_depth() / ev.rate, 1e-9) * 0.25
+    for _ in range(400):
+        if np.all(np.isfinite(ev.t_clear)):
+            return float(ev.t_clear.max())
+        ev.advance_to(ev.t + chunk)
+        chunk *= 1.2
+    raise ValueError("the die did not reach its end point within 400 polishing steps: check the inputs (contact_height, selectivities)")
+
+
+def _at(ev: DieEvolution, time: float, fresh) -> DieEvolution:
+    """``ev`` advanced to ``time``; a ``fresh()`` one if ``ev`` is already past it, with the event times of ``ev``."""
+    if time >= ev.t:
+        ev.advance_to(time)
+        return ev
+    new = fresh()
+    new.advance_to(time)
+    new.t_planar, new.t_copper_clear, new.t_clear = ev.t_planar.copy(), ev.t_copper_clear.copy(), ev.t_clear.copy()
+    return new
+
+
+def _prepare(layout, config, process, planarization_length, weighting, cell_size, **process_values):
+    config = _config(config)
+    layout = load_layout(layout, cell_size)
+    if process is None or isinstance(process, str):
+        process = DieProcess.from_values(process or "oxide", **process_values)
+    elif process_values:
+        raise ValueError("give the die inputs either as a DieProcess or as keywords, not both")
+    film = film_stack(process).film  # the wafer solve polishes the film of the process
+    if getattr(config, "film", film) != film:
+        config = config.replace(film=film)
+    w, derived = _weighting(config, planarization_length, weighting)
+    eff = effective_density(layout.density, layout.cell_size, w)
+    return config, layout, process, w, derived, eff
+
+
+def simulate(layout, time: float | None = None, *, config=None, blanket_rate: float | None = None, process=None,
+             planarization_length: float | None = None, weighting: str = "gaussian", cell_size: float | None = None, **process_values) -> DieResult:
+    """Polish one die (docs/model.md, section 18).
+
+    Parameters
+    ----------
+    layout : Layout, str or path
+        A :class:`Layout`, the name of a built-in die (:data:`BUILTIN_LAYOUTS`) or a layout CSV.
+    time : float, optional
+        Polishing time (s). Default: the end point (every cell planarized, oxide; cleared, copper)
+        times 1 + ``over_polish``.
+    config : cmpsim.Config, optional
+        The wafer-scale inputs (default :meth:`Config.default`): the pad stack gives the
+        planarization length and the summit radius; solved once for the blanket rate.
+    blanket_rate : float, optional
+        Blanket removal rate (m/s); default the wafer-mean removal rate of ``cmpsim.solve(config)``.
+    process : DieProcess or "oxide" / "copper"
+        The film stack; keywords (``step_height="0.8 um"``, ...) set its inputs with units.
+    planarization_length : float, optional
+        Override the length (m) derived from the pad stack.
+    weighting : "gaussian" or "pad"
+        The weighting function of the effective density (:mod:`cmpsim.die.density`).
+    cell_size : float, optional
+        Cell size (m) of a built-in die (default 50 um).
+    """
+    config, layout, process, w, derived, eff = _prepare(layout, config, process, planarization_length, weighting, cell_size, **process_values)
+    if blanket_rate is None:
+        from ..model import solve
+
+        blanket_rate = float(solve(config, relative=False).removal_rate_mean)
+    if time is not None and not (math.isfinite(time) and time >= 0):
+        raise ValueError(f"time must be >= 0 s; got {time!r}")
+    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius)
+    t_end = _end_point(ev)  # also gives every cell's event times, reached or not by `time`
+    if time is None:
+        time = t_end * (1.0 + process.over_polish)
+    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius))
+    return DieResult(layout, process, float(time), float(blanket_rate), w.length, derived, weighting, eff, ev)
+
+
+# ------------------------------------------------------------------------------ the wafer
+def die_sites(die_size: tuple[float, float], wafer_diameter: float, edge_exclusion: float) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (x, y) (m) of the whole dies on a wafer: a grid with a die corner at the wafer centre,
+    keeping the dies whose four corners lie within wafer radius - edge_exclusion."""
+    wx, wy = die_size
+    limit = 0.5 * wafer_diameter - edge_exclusion
+    if limit <= 0:
+        raise ValueError(f"edge_exclusion = {edge_exclusion:g} m leaves no wafer (radius {0.5 * wafer_diameter:g} m)")
+    nx, ny = int(limit // wx) + 1, int(limit // wy) + 1
+    cx = (np.arange(-nx, nx) + 0.5) * wx
+    cy = (np.arange(-ny, ny) + 0.5) * wy
+    X, Y = np.meshgrid(cx, cy)
+    far = np.hypot(np.abs(X) + 0.5 * wx, np.abs(Y) + 0.5 * wy)
+    keep = far <= limit * (1 + 1e-12)
+    if not keep.any():
+        raise ValueError(f"no {wx * 1e3:g} x {wy * 1e3:g} mm die fits inside {limit * 1e3:g} mm of the wafer centre")
+    return X[keep], Y[keep]
+
+
+def blanket_rates(result, x, y) -> np.ndarray:
+    """The rotation-averaged removal rate of a wafer solve at the points (x, y) (m/s): its
+    ``removal_rate_profile`` interpolated linearly in radius (constant inside the first and beyond the last ring centre)."""
+    r = np.hypot(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    return np.interp(r, np.asarray(result.radius), np.asarray(result.removal_rate_profile))
+
+
+@dataclass
+class WaferDies:
+    """Every die of a wafer after ``time`` (s): one wafer solve, one die evolution read at each die's equivalent time."""
+
+    die: DieResult  # the reference die at the end time at the reference rate
+    result: object = field(repr=False)  # the wafer solve (cmpsim.Result)
+    time: float = 0.0
+    x: np.ndarray = field(default=None, repr=False)
+    y: np.ndarray = field(default=None, repr=False)
+    blanket_rate: np.ndarray = field(default=None, repr=False)
+    time_to_clear: np.ndarray = field(default=None, repr=False)
+    time_to_planarize: np.ndarray = field(default=None, repr=False)
+    dishing_max: np.ndarray = field(default=None, repr=False)
+    erosion_max: np.ndarray = field(default=None, repr=False)
+    step_height_max: np.ndarray = field(default=None, repr=False)
+
+    def to_dict(self) -> dict:
+        """The object of ``cmpsim die --wafer --json``: the die at the reference rate plus the list ``dies``."""
+        out = self.die.to_dict()
+        out["time"] = self.time
+        out["wafer_diameter"] = float(self.result.config.wafer_diameter)
+        out["dies"] = [
+            {"x": float(a), "y": float(b), "blanket_rate": float(k), "time_to_clear": _finite(float(tc)),
+             "time_to_planarize": _finite(float(tp)), "dishing_max": _finite(float(d)), "erosion_max": _finite(float(e)),
+             "step_height_max": _finite(float(s))}
+            for a, b, k, tc, tp, d, e, s in zip(self.x, self.y, self.blanket_rate, self.time_to_clear, self.time_to_planarize,
+                                                 self.dishing_max, self.erosion_max, self.step_height_max)
+        ]
+        return out
+
+    def dataset(self):
+        """The dies as an ``xarray.Dataset`` on the ``die`` dimension (CF attributes)."""
+        vars_ = {name: getattr(self, name) for name in WAFER_OUTPUTS}
+        return _cf_dataset(("die",), vars_, WAFER_OUTPUTS, {"time": self.time}, {},
+                           f"cmpsim die --wafer: {self.die.layout.name}, {self.die.process.kind}")
+
+    def plot(self):
+        """Wafer maps per die: dishing, erosion and time to clear (copper); step height and time to planarize (oxide). A matplotlib Figure."""
+        import matplotlib.pyplot as plt
+        from matplotlib.collections import PatchCollection
+        from matplotlib.patches import Circle, Rectangle
+
+        wx, wy = self.die.layout.size
+        radius = 0.5 * self.result.config.wafer_diameter * 1e3
+        if self.die.evolution.stack.metal:
+            panels = [("dishing_max", self.dishing_max, "nm", 1e9), ("erosion_max", self.erosion_max, "nm", 1e9), ("time_to_clear", self.time_to_clear, "s", 1.0)]
+        else:  # oxide: no dishing or erosion; its end point is planarity
+            panels = [("step_height_max", self.step_height_max, "nm", 1e9), ("time_to_planarize", self.time_to_planarize, "s", 1.0)]
+        fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4.8), layout="constrained")
+        for ax, (name, values, unit, scale) in zip(axes, panels):
+            rects = [Rectangle(((a - 0.5 * wx) * 1e3, (b - 0.5 * wy) * 1e3), wx * 1e3, wy * 1e3) for a, b in zip(self.x, self.y)]
+            pc = PatchCollection(rects, cmap="viridis", edgecolor="white", linewidth=0.3)
+            vals = np.asarray(values, dtype=float) * scale
+            pc.set_array(np.where(np.isfinite(vals), vals, np.nan))
+            ax.add_collection(pc)
+            ax.add_patch(Circle((0, 0), radius, fill=False, color="k", lw=1))
+            ax.set_xlim(-radius * 1.02, radius * 1.02)
+            ax.set_ylim(-radius * 1.02, radius * 1.02)
+            ax.set_aspect("equal")
+            ax.set_title(name.replace("_", " "), fontsize=10)
+            ax.set_xlabel("x (mm)")
+            ax.set_ylabel("y (mm)")
+            fig.colorbar(pc, ax=ax, label=f"{name.replace('_', ' ')} ({unit})")
+        fig.suptitle(f"{len(self.x)} dies {self.die.layout.name!r}, {self.die.process.kind}, t = {self.time:.0f} s")
+        return fig
+
+
+def simulate_wafer(layout, time: float | None = None, *, config=None, result=None, process=None, planarization_length: float | None = None,
+                   weighting: str = "gaussian", cell_size: float | None = None, **process_values) -> WaferDies:
+    """Polish every die of a wafer (docs/model.md, section 18.7).
+
+    One wafer solve (``result``, or ``cmpsim.solve(config)``) gives the blanket rate at each die
+    centre (:func:`blanket_rates`); the dies tile the wafer inside its ``edge_exclusion``
+    (:func:`die_sites`, die size = layout size). ``time`` (s) defaults to the end point of the
+    slowest die times 1 + ``over_polish``. Other arguments as :func:`simulate`.
+    """
+    if result is not None and config is not None and config.to_dict() != result.config.to_dict():
+        raise ValueError("give config or the result of its solve, not a result of other inputs: the dies take the pad and the wafer from result.config")
+    if result is not None:
+        kind = process.kind if isinstance(process, DieProcess) else (process or "oxide")
+        want = film_stack(DieProcess(kind=kind)).film
+        if getattr(result.config, "film", want) != want:
+            raise ValueError(f"the {kind} process needs the blanket rate of film = {want!r}; the result was solved for film = {result.config.film!r}")
+    config, layout, process, w, derived, eff = _prepare(layout, config if result is None else result.config, process,
+                                                        planarization_length, weighting, cell_size, **process_values)
+    if result is None:
+        from ..model import solve
+
+        result = solve(config, relative=False)
+    x, y = die_sites(layout.size, config.wafer_diameter, config.edge_exclusion)
+    k = blanket_rates(result, x, y)
+    if not np.all(k > 0):
+        raise ValueError("the wafer solve removes nothing at some die sites: no blanket rate to polish them")
+    k_ref = float(np.max(k))
+    if time is not None and not (math.isfinite(time) and time >= 0):
+        raise ValueError(f"time must be >= 0 s; got {time!r}")
+    ev = DieEvolution(layout, process, eff, k_ref, config.asperity_radius)
+    t_end_ref = _end_point(ev)  # the reference (fastest) die's end point, and its event times
+    if time is None:
+        time = t_end_ref * k_ref / float(np.min(k)) * (1.0 + process.over_polish)
+    t_equiv = time * k / k_ref  # each die's time at the reference rate
+    order = np.argsort(t_equiv)
+    ev = _at(ev, float(t_equiv[order[0]]), lambda: DieEvolution(layout, process, eff, k_ref, config.asperity_radius))
+    n = len(x)
+    dish, ero, step = np.empty(n), np.empty(n), np.empty(n)
+    for i in order:
+        ev.advance_to(float(t_equiv[i]))
+        dish[i], ero[i], step[i] = (np.nan if v is None else v for v in (_max(ev.dishing), _max(ev.erosion), _max(ev.step_height)))
+    # event times scale back with the rate; events after the reference die's last time are not known
+    tc = ev.t_clear.max() * k_ref / k
+    tp = ev.t_planar.max() * k_ref / k
+    die = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev)
+    return WaferDies(die, result, float(time), x, y, k, tc, tp, dish, ero, step)

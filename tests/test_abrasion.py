@@ -1,0 +1,247 @@
+"""The abrasive removal law (issue 24): kernels checked by hand, limits, continuity, zero loading."""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import mpmath
+import numpy as np
+import pytest
+
+import cmpsim
+from cmpsim.abrasion import (
+    AbrasiveContact,
+    abrasive_removal_rate,
+    groove_area,
+    interference,
+    pad_force,
+    pad_gap,
+    size_nodes,
+    sphere_load,
+)
+from cmpsim.contact import PadSurface, asperity_laws
+from cmpsim.kinetics import chemical_rate, flash_temperature, series_rate
+from cmpsim.models.removal_laws import abrasive_contact
+
+# silica (E 72 GPa, nu 0.17, H 9 GPa) on oxide (the same constants): the default pair
+E_SIO2, NU_SIO2, H_SIO2 = 72e9, 0.17, 9e9
+
+
+def silica_on_oxide(**kw):
+    c = (1 - NU_SIO2**2) / E_SIO2
+    args = dict(diameter=100e-9, diameter_std=0.0, volume_fraction=0.06, pad_pressure=50e6, e_star=1 / (2 * c),
+                hardness=H_SIO2, k_factor=0.454 + 0.41 * NU_SIO2, film_share=0.5, efficiency=0.1)
+    args.update(kw)
+    return AbrasiveContact(**args)
+
+
+def test_a_single_hertz_summit_removes_what_the_hand_calculation_gives():
+    """One elastic pad summit (R = 7 um, interference 1 um, E' = 0.55 GPa) on 1e-10 m^2 of wafer,
+    100 nm silica at phi = 0.06 on oxide, 0.63 m/s, worked by hand step by step."""
+    R, w, e_pad, area_n = 7e-6, 1e-6, 0.55e9, 1e-10
+    a_real = math.pi * R * w  # Hertz contact area, m^2
+    load = 4 / 3 * e_pad * math.sqrt(R) * w**1.5  # N
+    p_c, a_r = load / area_n, a_real / area_n
+    p_r = load / a_real  # 1.94 mN on 22.0 um^2: 88.2 MPa mean real pressure on the summit
+    # 1. trapped particles per unit real area: n = phi / (pi d^3/6) * d = 6 phi / (pi d^2)
+    d, phi = 100e-9, 0.06
+    n = 6 * phi / (math.pi * d**2)  # 1.146e13 1/m^2
+    # 2. sparse? the particles could carry n * 50 MPa * pi r^2 = 1.5 phi * 50 MPa = 4.5 MPa < p_r: the pad touches the wafer
+    assert n * 50e6 * math.pi * (d / 2) ** 2 < p_r
+    F = 50e6 * math.pi * (d / 2) ** 2  # 3.927e-7 N per particle
+    # 3. elastic? Hertz load at omega_e = (3 pi K H / 4 E*)^2 r exceeds F
+    e_star = E_SIO2 / (2 * (1 - NU_SIO2**2))
+    K = 0.454 + 0.41 * NU_SIO2
+    omega_e = (3 * math.pi * K * H_SIO2 / (4 * e_star)) ** 2 * (d / 2)
+    assert 4 / 3 * e_star * math.sqrt(d / 2) * omega_e**1.5 > F
+    omega = (3 * F / (4 * e_star * math.sqrt(d / 2))) ** (2 / 3)  # Hertz interference, 1.08 nm
+    depth = omega / 2  # equal compliances: the film takes half
+    # 4. circular segment of depth `depth` of a circle of radius d/2
+    r = d / 2
+    segment = r**2 * math.acos(1 - depth / r) - (r - depth) * math.sqrt(2 * r * depth - depth**2)
+    # 5. rate
+    expected = 0.1 * a_r * 0.63 * n * segment
+    got = abrasive_removal_rate(np.array([p_c]), np.array([a_r]), np.array([0.63]), silica_on_oxide())
+    assert got.rate[0] == pytest.approx(expected, rel=1e-9)
+    # by hand: n = 1.146e13 1/m^2, F = 0.393 uN, omega = 1.082 nm, segment ~ (4/3) sqrt(2r) (0.541 nm)^1.5 = 5.30e-18 m^2: RR = 0.1 x 0.2199 x 0.63 m/s x 1.146e13 x 5.30e-18 = 8.42e-7 m/s = 5.05e4 nm/min
+    assert got.rate[0] * 6e10 == pytest.approx(5.05e4, rel=0.01)
+    assert got.gap[0] == 0.0 and got.depth[0] == pytest.approx(depth, rel=1e-12)
+    assert got.active_particles[0] == pytest.approx(a_r * n, rel=1e-12)
+
+
+def test_the_sphere_law_is_the_per_summit_law_of_the_contact_module():
+    pad = PadSurface(sigma_s=1e-6, asperity_density=1e8, asperity_radius=50e-9, e_star=37e9, hardness=9e9, poisson=0.17)
+    omega = np.geomspace(1e-3, 200, 400) * pad.omega_e
+    area, load, regime = asperity_laws(omega, pad)
+    assert set(regime) == {1, 2, 3}
+    np.testing.assert_allclose(sphere_load(omega, 50e-9, 37e9, 9e9, pad.k_factor), load, rtol=1e-13)
+
+
+def test_the_interference_inverts_the_sphere_law_in_every_regime():
+    r, e, h, k = 50e-9, 37e9, 9e9, 0.52
+    we = (3 * math.pi * k * h / (4 * e)) ** 2 * r
+    omega = np.geomspace(1e-3, 300, 500) * we
+    loads = sphere_load(omega, r, e, h, k)
+    np.testing.assert_allclose(interference(loads, r, e, h, k), omega, rtol=1e-12)
+    assert interference(np.array([0.0]), r, e, h, k)[0] == 0.0
+
+
+def test_the_groove_section_is_the_circular_segment_to_mpmath_precision():
+    r = 50e-9
+    with mpmath.workdps(40):
+        for depth in [1e-15, 1e-12, 3e-10, 2.4e-9, 1e-8, 5e-8, 9e-8]:
+            rr, dd = mpmath.mpf(r), mpmath.mpf(depth)
+            exact = rr**2 * mpmath.acos(1 - dd / rr) - (rr - dd) * mpmath.sqrt(2 * rr * dd - dd**2)
+            assert float(groove_area(r, depth)) == pytest.approx(float(exact), rel=1e-13)
+
+
+def test_the_rate_is_continuous_across_the_elastic_plastic_indentation_boundaries():
+    """Vary the pad's pressure on the particles so that their load crosses the film's first
+    yield (omega_e) and full plasticity (54 omega_e): the rate has no jump at either."""
+    base = silica_on_oxide()
+    r = base.diameter / 2
+    we = (3 * math.pi * base.k_factor * base.hardness / (4 * base.e_star)) ** 2 * r
+    for omega_b in (we, 54 * we):
+        f_b = float(sphere_load(omega_b * (1 - 1e-15), r, base.e_star, base.hardness, base.k_factor))
+        p_b = f_b / (math.pi * r**2)  # pad pressure at which a particle carries exactly f_b
+        rates = []
+        for eps in (-1e-9, 1e-9):
+            c = silica_on_oxide(pad_pressure=p_b * (1 + eps))
+            rates.append(abrasive_removal_rate(np.array([1e5]), np.array([1e-3]), np.array([1.0]), c).rate[0])
+        assert rates[1] / rates[0] - 1 == pytest.approx(0.0, abs=1e-8)
+    # and it is increasing across the whole range (no step down either)
+    p = np.geomspace(0.1, 1e3, 300) * 1e6
+    rr = [abrasive_removal_rate(np.array([1e5]), np.array([1e-3]), np.array([1.0]), silica_on_oxide(pad_pressure=q)).rate[0] for q in p]
+    assert np.all(np.diff(rr) > 0)
+
+
+def test_the_law_is_prestons_where_the_real_contact_area_follows_the_load():
+    """Luo & Dornfeld's limit: with summits of constant mean real pressure (fully plastic pad
+    summits, A_r = p_c / H_pad, or Greenwood-Williamson's exponential heights) and particles
+    that do not carry the whole real pressure, RR = k_p p_c |du| with one k_p."""
+    h_pad = 50e6
+    pc = np.array([5e3, 14e3, 27.6e3, 41e3])
+    u = np.array([0.3, 0.63, 1.0, 1.75])
+    P, U = np.meshgrid(pc, u)
+    rr = abrasive_removal_rate(P, P / h_pad, U, silica_on_oxide()).rate
+    k_p = rr / (P * U)
+    np.testing.assert_allclose(k_p, k_p.flat[0], rtol=1e-12)
+
+
+def test_zero_loading_removes_nothing_without_a_division_by_zero():
+    with np.errstate(all="raise"):
+        got = abrasive_removal_rate(np.array([27e3, 0.0]), np.array([1e-3, 0.0]), np.array([0.63, 0.63]), silica_on_oxide(volume_fraction=0.0))
+    assert np.all(got.rate == 0.0) and np.all(got.active_particles == 0.0)
+
+
+def test_zero_loading_in_a_solve_gives_zero_removal_and_says_so():
+    with pytest.warns(RuntimeWarning, match="solids_loading = 0: no abrasive particles"):
+        r = cmpsim.solve(solids_loading=0, grid="coarse", relative=False)
+    assert r.removal_rate_mean == 0.0
+    assert r.contact_load_fraction > 0  # the pad still touches the wafer
+
+
+def test_at_fixed_mass_loading_the_rate_does_not_depend_on_the_particle_size():
+    """The model's size law (docs/model.md, 'How the rate depends on size and loading'): n ~ 1/d^2
+    particles each carrying F ~ d^2 and ploughing a groove ~ d^2: the product is size-free."""
+    rates = [abrasive_removal_rate(np.array([27e3]), np.array([6e-4]), np.array([0.63]), silica_on_oxide(diameter=d)).rate[0]
+             for d in (20e-9, 100e-9, 1e-6, 2e-6)]
+    np.testing.assert_allclose(rates, rates[0], rtol=1e-9)
+    # and while the pad touches the wafer, a spread of sizes changes nothing either (sum n A_g ~ <x^3>/<x^3>)
+    spread = abrasive_removal_rate(np.array([27e3]), np.array([6e-4]), np.array([0.63]), silica_on_oxide(diameter_std=40e-9)).rate[0]
+    assert spread == pytest.approx(rates[0], rel=1e-9)
+
+
+def test_while_the_pad_touches_the_wafer_the_rate_is_proportional_to_the_loading():
+    rr = [abrasive_removal_rate(np.array([27e3]), np.array([6e-4]), np.array([0.63]), silica_on_oxide(volume_fraction=phi)).rate[0]
+          for phi in (0.01, 0.02, 0.04)]
+    np.testing.assert_allclose(np.array(rr) / rr[0], [1, 2, 4], rtol=1e-12)
+
+
+def test_when_the_particles_hold_the_pad_off_the_wafer_they_share_the_real_pressure():
+    """Dense slurry, mean real pressure low: the pad rests on the particles at a gap g where
+    they carry p_r together; with a size spread the largest ones carry most (Luo & Dornfeld 2003)."""
+    x, w = size_nodes(100e-9, 30e-9)
+    assert np.sum(w) == pytest.approx(1.0) and np.sum(w * x) == pytest.approx(100e-9, rel=1e-9)
+    assert np.sqrt(np.sum(w * (x - 100e-9) ** 2)) == pytest.approx(30e-9, rel=1e-6)
+    n = 0.4 / np.sum(w * np.pi * x**3 / 6) * w * x
+    p_r = np.array([5e6])
+    g = pad_gap(p_r, x, n, 50e6)
+    assert g[0] > 0
+    carried = np.sum(n * pad_force(x - g[0], x / 2, 50e6))
+    assert carried == pytest.approx(p_r[0], rel=1e-9)
+    loads = pad_force(x - g[0], x / 2, 50e6)
+    assert np.all(np.diff(loads) >= 0) and loads[0] == 0.0  # the smallest are idle
+
+
+def test_the_default_model_uses_the_abrasive_law_of_its_config():
+    c = cmpsim.Config.default()
+    a = abrasive_contact(c)
+    assert (c.removal_law, c.abrasive, c.film) == ("abrasive", "silica", "oxide")
+    assert a.pad_pressure == c.pad_hardness  # IC1000 flows around the particles: 4 E'/(3 pi) = 0.23 GPa > H
+    assert a.film_share == pytest.approx(0.5)
+    cu = abrasive_contact(c.replace(film="copper", abrasive="alumina"))
+    assert cu.hardness == 1.5e9 and cu.film_share > 0.5  # copper is the softer, more compliant body
+
+
+def test_the_chemical_step_limits_the_rate_in_series():
+    mech = np.array([1e-9, 1e-9, 0.0, 0.0])
+    chem = np.array([1e-9, 1e-6, 1e-9, 0.0])
+    np.testing.assert_allclose(series_rate(chem, mech), [0.5e-9, 1e-9 / (1 + 1e-3), 0.0, 0.0], rtol=1e-12)
+    t = flash_temperature(298.15, 0.4, 27.6e3, 0.63, 1e-3)
+    assert t == pytest.approx(298.15 + 1e-3 * 0.4 * 27.6e3 * 0.63)
+    assert chemical_rate(298.15, 3e-9, 50e3, 298.15) == pytest.approx(3e-9)
+    assert chemical_rate(t, 3e-9, 50e3, 298.15) > 3e-9  # friction heats, the chemistry speeds up
+
+
+def test_two_step_kinetics_in_a_solve_is_slower_than_either_step_alone():
+    mech = cmpsim.solve(grid="coarse", relative=False)
+    both = cmpsim.solve(grid="coarse", relative=False, removal_kinetics="two_step")
+    assert 0 < both.removal_rate_mean < mech.removal_rate_mean
+    assert both.removal_rate_mean < both.config.chemical_rate * 1.1  # below the (slightly heated) chemical rate
+
+
+def test_the_new_inputs_sweep_with_units_and_choices(tmp_path):
+    """Every new input is an ordinary registry input: a sweep takes solids_loading in % and the abrasive by name."""
+    import tomllib
+
+    from cmpsim.sweeps import SweepSpec, sweep
+
+    spec = SweepSpec.from_mapping(tomllib.loads('[base]\ngrid = "coarse"\n[axes]\nsolids_loading = ["2 %", "4 %"]\nabrasive = ["silica", "alumina"]\n'))
+    ds = sweep(spec, workers=0, progress=False)
+    assert ds["solids_loading"].values.tolist() == [pytest.approx(0.02), pytest.approx(0.04)]
+    rr = ds["removal_rate_mean"]
+    ratio = (rr.sel(abrasive="silica").isel(solids_loading=1) / rr.sel(abrasive="silica").isel(solids_loading=0)).item()
+    assert ratio == pytest.approx(2.0, rel=0.03)  # proportional to the loading (docs/model.md, 13e.6)
+    assert rr.sel(abrasive="alumina").isel(solids_loading=0).item() != rr.sel(abrasive="silica").isel(solids_loading=0).item()
+
+
+def test_the_two_step_constants_can_be_calibrated(tmp_path):
+    """`cmpsim calibrate --free chemical_rate` fits the chemical step to data it limits."""
+    from cmpsim import calibrate
+
+    truth = cmpsim.Config.default().replace(grid="coarse", removal_kinetics="two_step", chemical_rate="60 nm/min")
+    rows = []
+    for psi in (2, 4, 6):
+        r = cmpsim.solve(truth, applied_pressure=f"{psi} psi", relative=False)
+        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{psi} psi")
+    path = tmp_path / "two_step.csv"
+    path.write_text("# dataset: synthetic\n# citation: made by the model\n# provenance: test\n# conditions: default\n"
+                    "dataset,quantity,value,unit,uncertainty,comparison,applied_pressure\n" + "\n".join(rows) + "\n")
+    fit = calibrate(path, free=["chemical_rate"], config=truth.replace(chemical_rate="150 nm/min"), progress=False)
+    assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
+
+
+def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_computes():
+    """docs/model.md 13e.6, CHANGELOG: base case 117.53 nm/min with the abrasive law (88.41 with the
+    shear-power law, the default before issue 24); 187.31 nm/min at Lai's conditions for copper and alumina."""
+    base = cmpsim.solve(relative=False)
+    old = cmpsim.solve(relative=False, removal_law="shear_power")
+    lai = cmpsim.solve(relative=False, film="copper", abrasive="alumina", applied_pressure="48 kPa", rotation_speed="75 rpm",
+                       centre_distance="89.13 mm", wafer_diameter="100 mm", particle_diameter="300 nm")
+    assert round(base.removal_rate_mean * 6e10, 2) == 117.53
+    assert round(old.removal_rate_mean * 6e10, 2) == 88.41
+    assert round(lai.removal_rate_mean * 6e10, 2) == 187.31
+    # the film, pressure and contact of the default did not move (only the removal law changed)
+    assert base.film_thickness_center == old.film_thickness_center and base.contact_load_fraction == old.contact_load_fraction
