@@ -62,7 +62,7 @@ class CavitationError(RuntimeError):
     """The active-set iteration of the JFO problem did not settle."""
 
 
-def upwind_couette_matrix(grid: PolarGrid, coeffs: FaceCoefficients) -> tuple[sp.csr_matrix, np.ndarray]:
+def upwind_couette_matrix(grid: PolarGrid, coeffs: FaceCoefficients, direction: FaceCoefficients | None = None) -> tuple[sp.csr_matrix, np.ndarray]:
     """The Couette flux of the fill fraction theta, upwinded: ``(B, c)`` with B theta + c, m^3/s.
 
     ``(B @ theta + c)[P]`` is the sum over the faces of cell P of the outward Couette flux
@@ -71,32 +71,38 @@ def upwind_couette_matrix(grid: PolarGrid, coeffs: FaceCoefficients) -> tuple[sp
     enters carries theta = 1 (the edge is flooded), which is the constant vector ``c``.
     With theta = 1 everywhere, ``B @ 1 + c`` is :func:`cmpsim.reynolds.flux_divergence` (to
     round-off: the same face fluxes summed in another order).
+
+    ``direction`` (optional): the face coefficients whose flux signs choose the upwind cell
+    (default ``coeffs``). With it, ``(B, c)`` is linear in ``coeffs``: the derivative of the
+    upwinded flux of ``direction`` in the direction ``coeffs``, exact wherever no face flux
+    changes sign (used by the coupled solve of a compliant pad, :mod:`cmpsim.compliance`).
     """
     n_r, n_t = grid.n_r, grid.n_theta
     fr, fa = face_fluxes(grid, coeffs)
+    sr, sa = (fr, fa) if direction is None else face_fluxes(grid, direction)
     i = np.arange(n_r)[:, None] * np.ones((1, n_t), dtype=int)
     j = np.arange(n_t)[None, :] * np.ones((n_r, 1), dtype=int)
     P = grid.index(i, j)
     rows, cols, vals = [], [], []
 
-    def face(p, n, flux):
+    def face(p, n, flux, sign_flux):
         # flux > 0 leaves p towards n: carried by theta_p; else by theta_n
-        up = np.where(flux > 0, p, n)
+        up = np.where(sign_flux > 0, p, n)
         for row, sign in ((p, 1.0), (n, -1.0)):
             rows.append(row.ravel())
             cols.append(up.ravel())
             vals.append(sign * flux.ravel())
 
     interior = i < n_r - 1
-    face(P[interior], grid.index(i[interior] + 1, j[interior]), fr[interior])
-    face(P, grid.index(i, j + 1), fa)
+    face(P[interior], grid.index(i[interior] + 1, j[interior]), fr[interior], sr[interior])
+    face(P, grid.index(i, j + 1), fa, sa)
     edge = ~interior
-    out = np.maximum(fr[edge], 0.0)
+    leaves = sr[edge] > 0
     rows.append(P[edge].ravel())
     cols.append(P[edge].ravel())
-    vals.append(out.ravel())
+    vals.append(np.where(leaves, fr[edge], 0.0).ravel())
     c = np.zeros(grid.size)
-    c[P[edge].ravel()] = np.minimum(fr[edge], 0.0).ravel()
+    c[P[edge].ravel()] = np.where(leaves, 0.0, fr[edge]).ravel()
     B = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(grid.size, grid.size))
     return B, c
 

@@ -53,7 +53,7 @@ from .grid import face_operators as _face_operators
 # the pad stack's kernels moved to cmpsim.padstack; re-exported here, where they were public
 from .padstack import *  # noqa: F403
 from .padstack import __all__ as _PADSTACK
-from .reynolds import FaceCoefficients, assemble_operator, factorize, flux_divergence, lubrication_coefficients
+from .reynolds import FaceCoefficients, factorize, lubrication_coefficients
 from .state import EquilibriumError, PressureState
 
 __all__ = [
@@ -173,8 +173,7 @@ class _Evaluation:
     h: np.ndarray  # film at the cell centres
     face_h: tuple  # (radial, angular) film on the faces
     coeffs: FaceCoefficients
-    matrix: sp.csr_matrix
-    rhs: np.ndarray
+    matrix: sp.csr_matrix  # dR/dphi (the slurry model's: the Reynolds operator, or the JFO mass balance's)
     R: np.ndarray  # Reynolds residual, flat
     G: np.ndarray  # k w - P, flat
     p_abs: np.ndarray  # p_slurry of PressureState (granular: absolute; Newtonian: gauge acting)
@@ -222,16 +221,14 @@ def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
     k = problem.foundation.stiffness
     face_h, coeffs = _face_coefficients(problem, u, w, ops)
     h = _rigid_film(problem, u, problem.xc, problem.yc) + w
-    A = assemble_operator(problem.grid, coeffs)
-    rhs = -flux_divergence(problem.grid, coeffs)
-    R = A @ phi.ravel() - rhs
+    R, A = problem.slurry.residual(problem.grid, coeffs, phi)
     p_abs, p_fluid, contact = _load(problem, phi, h)
     f = problem.foundation
     if f.local:
         G = (k * w - p_fluid - contact[0]).ravel()
     else:  # k (w - C p): the same scale as on the Winkler bed, to which it reduces when C = 1/k
         G = k * (w.ravel() - f.deflection(p_fluid + contact[0], problem.grid).ravel())
-    return _Evaluation(u, phi, w, h, face_h, coeffs, A, rhs, R, G, p_abs, p_fluid, contact)
+    return _Evaluation(u, phi, w, h, face_h, coeffs, A, R, G, p_abs, p_fluid, contact)
 
 
 def _load_derivative_h(problem, phi, h):
@@ -263,6 +260,8 @@ class CoupledLinearisation:
     krylov_iterations: int = 0
     # d(face flux)/d(face film) on the radial and angular faces (flat): R_w, and dR/du in the Jacobian
     face_slopes: tuple | None = None
+    # the cavitated cells it was linearised on (Gumbel, JFO), or None
+    cavitated: np.ndarray | None = None
 
     def solve(self, R, G):
         """(dphi, dw) of the Newton system (dphi, dw) = -J^-1 (R, G).
@@ -372,14 +371,13 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     zero = tuple(np.zeros_like(a) for a in d_rad)
     s_rad = np.empty(grid.size)
     s_ang = np.empty(grid.size)
+    flux_change = problem.slurry.flux_change
     for parity in (0, 1):
         mask = ops.ring_parity == parity
-        dc = FaceCoefficients(tuple(a * mask for a in d_rad), zero)
-        r = assemble_operator(grid, dc) @ phi + flux_divergence(grid, dc)
+        r = flux_change(grid, ev.coeffs, FaceCoefficients(tuple(a * mask for a in d_rad), zero), phi)
         s_rad[mask.ravel()] = r[mask.ravel()]
         mask = ops.sector_parity == parity
-        dc = FaceCoefficients(zero, tuple(a * mask for a in d_ang))
-        r = assemble_operator(grid, dc) @ phi + flux_divergence(grid, dc)
+        r = flux_change(grid, ev.coeffs, FaceCoefficients(zero, tuple(a * mask for a in d_ang)), phi)
         s_ang[mask.ravel()] = r[mask.ravel()]
     R_w = (ops.div_radial @ sp.diags(s_rad) @ ops.interp_radial + ops.div_angular @ sp.diags(s_ang) @ ops.interp_angular).tocsr()
     ar = ev.contact[1] + ev.contact[2] + ev.contact[3]
@@ -391,6 +389,7 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     problem.factorizations += 1
     lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
     lin.face_slopes = (s_rad, s_ang)
+    lin.cavitated = problem.slurry.cavitated(ev.phi)
     f = problem.foundation
     if not f.local:
         grid = problem.grid
@@ -497,10 +496,10 @@ def coupled_state(problem, u):
     mem.lin = lin
     pc, ae, aep, ap = ev.contact
     floored = ev.coeffs.floored / max(ev.coeffs.n_faces, 1)
-    cavitated = problem.slurry.cavitated(phi)
+    _, _, theta, cavitated = problem.slurry.pressures(phi)  # JFO: the fill fraction of the universal variable
     return PressureState(
         u, ev.h, phi, ev.p_abs, ev.p_fluid, pc, ae, aep, ap, res, None, floored,
-        cavitated=cavitated, deflection=w, coupling=(lin, ev),
+        fill_fraction=theta, cavitated=cavitated, deflection=w, coupling=(lin, ev),
     )
 
 
@@ -516,7 +515,9 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
     ops = _face_operators(problem.grid)
     lin, ev = st.coupling
     moved = np.max(np.abs(st.u - lin.u) / problem.u_scale) if lin is not None else np.inf
-    if lin is None or moved > _JACOBIAN_MOVE or lin.drift > _JACOBIAN_DRIFT:
+    # a factorisation taken on another cavitated set linearises the other side of p_cav
+    other_set = lin is not None and not _same_set(lin.cavitated, st.cavitated)
+    if lin is None or moved > _JACOBIAN_MOVE or lin.drift > _JACOBIAN_DRIFT or other_set:
         lin = _linearise(problem, ev, ops)  # the state converged on another position's factorisation
         st.coupling = (lin, ev)
         _memory(problem).lin = lin
@@ -544,6 +545,13 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
         dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
     )
     return J
+
+
+def _same_set(a, b) -> bool:
+    """Whether two cavitated sets (bool arrays, or None for none) are the same."""
+    if a is None or b is None:
+        return a is None and b is None
+    return bool(np.array_equal(np.asarray(a).ravel(), np.asarray(b).ravel()))
 
 
 # ---------------------------------------------------------------------------------- start, film

@@ -252,11 +252,6 @@ def _check_consistency(c: "Config") -> None:
             f"pad_compliance = {c.pad.pad_compliance!r} needs a model with pad contact: model must be 'lep' or 'elastic' "
             "(got 'hydrodynamic'); use pad_compliance = 'rigid' for the pure hydrodynamic variant"
         )
-    if c.pad.pad_compliance != "rigid" and c.cavitation == "jfo":
-        raise ValueError(
-            f"cavitation = 'jfo' is not available with pad_compliance = {c.pad.pad_compliance!r} (the mass-conserving active set is not "
-            "coupled to the pad deflection): valid values 'none' or 'gumbel', or use pad_compliance = 'rigid'"
-        )
     if c.pad.pad_compliance != "rigid" and c.pad.pad_poisson >= 0.5:
         raise ValueError(
             f"pad_poisson = {c.pad.pad_poisson:g} makes the compliant pad infinitely stiff (an incompressible bonded layer): "

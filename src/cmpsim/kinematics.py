@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["Kinematics", "KINEMATICS"]
+__all__ = ["Kinematics", "KINEMATICS", "head_sweep_nodes"]
 
 KINEMATICS = ("rotating", "sliding")
 
@@ -79,3 +79,46 @@ class Kinematics:
         """
         upx, upy, uwx, uwy = self.velocities(x, y)
         return 0.5 * (upx + uwx), 0.5 * (upy + uwy), upx - uwx, upy - uwy
+
+
+def head_sweep_nodes(centre_distance: float, amplitude: float, n: int):
+    """Centre distances and weights that average a quantity over one cycle of the head's sweep.
+
+    The head oscillates across the pad, e(t) = e_0 + A sin(2 pi t / T): the time average over a
+    cycle of a quantity f(e) that follows the head quasi-statically is
+
+        (1/T) int_0^T f(e(t)) dt = (1/pi) int_0^pi f(e_0 + A cos phi) dphi,
+
+    the integral of f against the arcsine (Chebyshev) density of the time spent at each e. The
+    n-point Gauss-Chebyshev rule of the first kind gives it with nodes
+    e_k = e_0 + A cos((2k - 1) pi / (2n)) and equal weights 1/n, exact for f a polynomial in e of
+    degree below 2n (Abramowitz & Stegun 25.4.38).
+
+    Parameters
+    ----------
+    centre_distance : float
+        Mean pad-centre to wafer-centre distance e_0, m (> 0).
+    amplitude : float
+        Sweep amplitude A, m (0 <= A < e_0: the wafer centre never crosses the pad centre).
+    n : int
+        Number of nodes (>= 1).
+
+    Returns
+    -------
+    distances : numpy.ndarray
+        e_k, m, from the outermost to the innermost.
+    weights : numpy.ndarray
+        1/n each (they sum to 1).
+    """
+    if not (np.isfinite(centre_distance) and centre_distance > 0):
+        raise ValueError(f"centre_distance must be finite and > 0 m (valid range: (0, inf)); got {centre_distance!r}")
+    if not (np.isfinite(amplitude) and 0 <= amplitude < centre_distance):
+        raise ValueError(
+            f"amplitude must be in [0, centre_distance) = [0, {centre_distance:g}) m (the wafer centre may not cross "
+            f"the pad centre); got {amplitude!r}"
+        )
+    if int(n) != n or n < 1:
+        raise ValueError(f"nodes must be an integer >= 1; got {n!r}")
+    n = int(n)
+    k = np.arange(1, n + 1)
+    return centre_distance + amplitude * np.cos((2 * k - 1) * np.pi / (2 * n)), np.full(n, 1.0 / n)

@@ -82,6 +82,13 @@ class CavitationModel(Protocol):
     def cavitated(self, p):
         """Cells held at p_cav, or None."""
 
+    def residual(self, grid, coeffs, phi):
+        """(R, dR/dphi): the discrete slurry problem's residual at the unknown phi of the coupled
+        solve of a compliant pad (flat, m^3/s) and its sparse derivative."""
+
+    def flux_change(self, grid, coeffs, dcoeffs, phi):
+        """The change of :meth:`residual` under a change ``dcoeffs`` of the face coefficients at fixed phi."""
+
 
 @runtime_checkable
 class SlurryModel(Protocol):
@@ -113,6 +120,10 @@ class SlurryModel(Protocol):
         """(p_slurry, acting gauge pressure, its derivative in phi)."""
 
     def cavitated(self, phi): ...
+
+    def residual(self, grid, coeffs, phi): ...
+
+    def flux_change(self, grid, coeffs, dcoeffs, phi): ...
 
     def edge_pressure(self, ambient_pressure: float) -> float:
         """The slurry pressure at the wafer edge (output ``ambient_pressure``), Pa."""

@@ -20,13 +20,20 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cavitation import CavitationSystem
+import scipy.sparse as sp
+
+from ..cavitation import CavitationSystem, upwind_couette_matrix
 from ..flowfactors import shear_stress_factors
 from ..grainflow import GrainFlow, grain_coefficients
 from ..removal import newtonian_shear_stress, slurry_shear_stress
-from ..reynolds import NEWTONIAN_GRAIN_COEFFICIENT
+from ..reynolds import NEWTONIAN_GRAIN_COEFFICIENT, assemble_operator, flux_divergence
 
-__all__ = ["NoCavitation", "GumbelCavitation", "JFOCavitation", "GranularSlurry", "NewtonianSlurry"]
+__all__ = ["NoCavitation", "GumbelCavitation", "JFOCavitation", "GranularSlurry", "NewtonianSlurry", "FILL_SCALE"]
+
+#: The pressure scale s of the JFO universal variable on a compliant pad, Pa: a cell with
+#: psi = p_cav - s is empty (theta = 0). One atmosphere, the scale of the cavitation pressure
+#: itself, keeps the columns of the cavitated cells of the Newton matrix of the order of the others.
+FILL_SCALE = 101325.0
 
 
 def _floored_share(coeffs) -> float:
@@ -65,6 +72,24 @@ class NoCavitation:
         """Cells held at p_cav (None: no cavitation)."""
         return None
 
+    # ---- the coupled solve of a compliant pad (cmpsim.compliance): the unknown, its residual
+    def residual(self, grid, coeffs, phi):
+        """(R, dR/dphi) of the Reynolds system at the unknown phi: R = A phi + div q, m^3/s (flat).
+
+        The system is linear in phi (Gumbel clips only the pressure that acts on the wafer),
+        so dR/dphi is the operator A of :func:`cmpsim.reynolds.assemble_operator`.
+        """
+        A = assemble_operator(grid, coeffs)
+        return A @ np.asarray(phi).ravel() + flux_divergence(grid, coeffs), A
+
+    def flux_change(self, grid, coeffs, dcoeffs, phi):
+        """The change of :meth:`residual` when the face coefficients change by ``dcoeffs`` at fixed phi, m^3/s.
+
+        Linear in ``dcoeffs`` (the residual is linear in the coefficients); ``coeffs`` are the
+        coefficients it is taken at (unused here: no upwinding).
+        """
+        return assemble_operator(grid, dcoeffs) @ np.asarray(phi).ravel() + flux_divergence(grid, dcoeffs)
+
 
 class GumbelCavitation(NoCavitation):
     """Gumbel (half-Sommerfeld): the pressure acting on the wafer is max(p, p_cav).
@@ -96,13 +121,29 @@ class GumbelCavitation(NoCavitation):
 class JFOCavitation(NoCavitation):
     """Mass-conserving JFO cavitation: unknowns p and 1 - theta (:class:`cmpsim.cavitation.CavitationSystem`).
 
-    The system is a complementarity problem (an active set), so neither the coarse-grid
-    starts nor the coupled solve of a compliant pad take it.
+    On a rigid pad the unknown is that of :class:`~cmpsim.cavitation.CavitationSystem`: p on
+    the full film, r = 1 - theta on the cavitated cells, solved by the primal-dual active set.
+    The system is a complementarity problem, so the coarse-grid starts do not take it.
+
+    On a compliant pad (:mod:`cmpsim.compliance`) the film and the pad deflection are solved
+    together by Newton's method, and the complementarity is carried by one universal variable
+    psi per cell, Pa (in the spirit of Elrod's switch function; Giacopini et al. 2010 for the
+    complementarity):
+
+        p = max(psi, p_cav),    theta = 1 - max(p_cav - psi, 0) / s,    s = :data:`FILL_SCALE`,
+
+    so that p >= p_cav, theta <= 1 and (p - p_cav)(1 - theta) = 0 hold by construction and the
+    mass balance A p + B theta + c = 0 (:meth:`CavitationSystem.mass_residual`) is one smooth
+    equation per cell on each side of psi = p_cav. Newton's method on it, with the derivative
+    taken on the side psi is on, is the semismooth Newton (primal-dual active set) iteration
+    of the rigid pad with the deflection solved in; the cavitated set is {psi < p_cav}. The
+    pressure that acts on the wafer is Gumbel's max(psi, p_cav); what differs from Gumbel is
+    the Reynolds residual, which conserves mass where the film ruptures.
     """
 
     name = "jfo"
     coarse_starts = False
-    couples_with_deflection = False
+    couples_with_deflection = True
 
     def __init__(self, p_cav: float):
         self.p_cav = float(p_cav)
@@ -118,13 +159,50 @@ class JFOCavitation(NoCavitation):
         return system
 
     def acting(self, p, system=None, acting=None):
+        """(p, theta, cavitated) of the unknown: that of ``system`` (rigid pad), or the
+        universal variable psi of the coupled solve when ``system`` is None."""
+        if system is None:
+            psi = np.asarray(p)
+            return np.maximum(psi, self.p_cav), self.fill_fraction(psi), psi < self.p_cav
         p, theta = system.fields(p)
         return p, theta, system.cavitated.reshape(p.shape)
 
-    def gauge(self, p, acting=None):  # the JFO Jacobian goes through acting(), with the system
+    def gauge(self, p, acting=None):  # the rigid-pad JFO Jacobian goes through acting(), with the system
         raise NotImplementedError("the JFO pressure needs its system: use acting()")
 
-    linearised = gauge
+    # ---- the universal variable psi of the coupled solve (class docstring)
+    def fill_fraction(self, psi):
+        """theta = 1 - max(p_cav - psi, 0) / s of the universal variable psi (Pa)."""
+        return 1.0 - np.maximum(self.p_cav - np.asarray(psi), 0.0) / FILL_SCALE
+
+    def linearised(self, psi):
+        """(p = max(psi, p_cav), dp/dpsi): 1 on the full film, 0 on the cavitated cells."""
+        psi = np.asarray(psi)
+        full = psi >= self.p_cav
+        return np.where(full, psi, self.p_cav), full.astype(float)
+
+    def cavitated(self, psi):
+        """Cells of the coupled solve whose film has ruptured (psi < p_cav)."""
+        return np.asarray(psi) < self.p_cav
+
+    def residual(self, grid, coeffs, psi):
+        """(R, dR/dpsi): the mass balance R = A p + B theta + c per cell, m^3/s (flat), of the
+        universal variable psi, with its derivative on the side of p_cav each cell is on:
+        A diag(full) + B diag(cavitated) / s (:mod:`cmpsim.cavitation`)."""
+        psi = np.asarray(psi).ravel()
+        A = assemble_operator(grid, coeffs)
+        B, c = upwind_couette_matrix(grid, coeffs)
+        p, dp = self.linearised(psi)
+        R = A @ p + B @ self.fill_fraction(psi) + c
+        return R, (A @ sp.diags(dp) + B @ sp.diags((1.0 - dp) / FILL_SCALE)).tocsr()
+
+    def flux_change(self, grid, coeffs, dcoeffs, psi):
+        """The change of :meth:`residual` under a change ``dcoeffs`` of the face coefficients
+        ``coeffs`` at fixed psi: the diffusive flux of p plus the Couette flux of theta,
+        upwinded as the flux of ``coeffs`` is (exact while no face flux changes sign), m^3/s."""
+        psi = np.asarray(psi).ravel()
+        B, c = upwind_couette_matrix(grid, dcoeffs, direction=coeffs)
+        return assemble_operator(grid, dcoeffs) @ self.linearised(psi)[0] + B @ self.fill_fraction(psi) + c
 
 
 # ---------------------------------------------------------------------------------- slurries
@@ -192,6 +270,14 @@ class GranularSlurry:
 
     def cavitated(self, phi):
         return None
+
+    def residual(self, grid, coeffs, phi):
+        """(R, dR/dphi) of the discrete slurry problem at the unknown phi (the coupled solve of a compliant pad)."""
+        return self.cavitation.residual(grid, coeffs, phi)
+
+    def flux_change(self, grid, coeffs, dcoeffs, phi):
+        """The change of :meth:`residual` under a change ``dcoeffs`` of the face coefficients at fixed phi."""
+        return self.cavitation.flux_change(grid, coeffs, dcoeffs, phi)
 
     def edge_pressure(self, ambient_pressure: float) -> float:
         """The slurry pressure at the wafer edge reported as ``ambient_pressure``: p0, Pa."""
