@@ -66,7 +66,9 @@ def test_jfo_on_a_compliant_pad_conserves_mass_in_every_cell_and_through_the_edg
     g_system, g_coeffs = _mass_system(gumbel)
     g_st = gumbel.solution.state
     leak = g_system.mass_residual(g_st.p_slurry, np.ones_like(g_st.p_slurry))
-    assert np.max(np.abs(leak)) > 1e-3 * np.abs(face_fluxes(gumbel.grid, g_coeffs)[0]).max()
+    # the leak's size depends on the grid (8.6e-4 of the largest face flux on the graded default
+    # grid, above 1e-3 on 24x64 equal rings); the claim is the contrast with JFO's 1e-10 above
+    assert np.max(np.abs(leak)) > 1e-5 * np.abs(face_fluxes(gumbel.grid, g_coeffs)[0]).max()
 
 
 def test_jfo_on_a_compliant_pad_balances_load_and_moment_to_1e_9(cavitating):
@@ -128,11 +130,17 @@ def test_jfo_at_ambient_cavitation_keeps_the_fluid_share_non_negative_on_every_p
 
 
 # ---------------------------------------------------------------------------------- suction of the layered default
-def _layer_scaled(scale):
+#: The grid the suction was measured on (equal rings). On the edge-graded presets the layered
+#: pad's FFT operator takes the spacing of the widest (central) ring and does not resolve the rim:
+#: see test_on_the_graded_grid_the_layered_pad_misses_its_winkler_limit below.
+SUCTION_GRID = "24x64"
+
+
+def _layer_scaled(scale, grid=SUCTION_GRID):
     """The default model on the layered stack with every thickness and modulus x ``scale``: the same
     long-wave stiffness k, a coupling length (lateral reach of the pad's deflection) x ``scale``."""
     return cmpsim.solve(
-        relative=False, pad_compliance="layer", pad_thickness=1.27e-3 * scale, subpad_thickness=1.27e-3 * scale,
+        relative=False, grid=grid, pad_compliance="layer", pad_thickness=1.27e-3 * scale, subpad_thickness=1.27e-3 * scale,
         pad_bulk_modulus=300e6 * scale, subpad_modulus=2.3e6 * scale,
     )
 
@@ -141,7 +149,7 @@ def test_layered_default_suction_comes_from_the_edge_band_and_vanishes_with_the_
     # docs/model.md, "Suction under the layered pad": the measurement behind the argument
     runs = {s: _layer_scaled(s) for s in (0.03, 1.0)}
     short, default = runs[0.03], runs[1.0]
-    winkler = cmpsim.solve(relative=False)
+    winkler = cmpsim.solve(relative=False, grid=SUCTION_GRID)
     # a coupling length far below a cell: the Winkler answer, the slurry pushing (+15 %)
     assert short.fluid_load_fraction == pytest.approx(winkler.fluid_load_fraction, abs=0.02) and short.fluid_load_fraction > 0.1
     # the default stack (coupling length 2.5 mm): the slurry pulls, about the whole load
@@ -161,3 +169,13 @@ def test_layered_default_suction_comes_from_the_edge_band_and_vanishes_with_the_
     # sub-ambient over nearly all the wafer, mean suction within Shan et al.'s measured 50-100 % of the load
     area = default.grid.area
     assert area[st.p_slurry < 0].sum() / area.sum() > 0.9
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "known defect (docs/limitations.md): on the edge-graded grid presets the layered pad's FFT grid "
+    "has the spacing of the widest ring, so the rim is smeared; a coupling length far below a cell "
+    "gives -16 % fluid share (default preset) and -22 % (fine) instead of the Winkler bed's +15 %"))
+def test_on_the_graded_grid_the_layered_pad_misses_its_winkler_limit():
+    short = _layer_scaled(0.03, grid="default")
+    winkler = cmpsim.solve(relative=False, grid="default")
+    assert short.fluid_load_fraction == pytest.approx(winkler.fluid_load_fraction, abs=0.02)
