@@ -186,10 +186,15 @@ class _Evaluation:
         return self.p_fluid + self.contact[0]
 
 
-def _face_coefficients(problem, u, w, ops) -> tuple:
+def _rigid_films(problem, u) -> tuple:
+    """The rigid film (m) at the cell centres, on the radial and on the angular faces at u."""
+    return tuple(_rigid_film(problem, u, x, y) for x, y in ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya)))
+
+
+def _face_coefficients(problem, rigid, w, ops) -> tuple:
     wf = w.ravel()
-    hr = _rigid_film(problem, u, problem.xr, problem.yr) + (ops.interp_radial @ wf).reshape(w.shape)
-    ha = _rigid_film(problem, u, problem.xa, problem.ya) + (ops.interp_angular @ wf).reshape(w.shape)
+    hr = rigid[1] + (ops.interp_radial @ wf).reshape(w.shape)
+    ha = rigid[2] + (ops.interp_angular @ wf).reshape(w.shape)
     return (hr, ha), _coefficients(problem, hr, ha)
 
 
@@ -218,10 +223,12 @@ def _load(problem, phi, h):
     return p_slurry, (1.0 - ar) * gauge, contact
 
 
-def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
+def _evaluate(problem, u, phi, w, ops, rigid=None) -> _Evaluation:
+    """Residuals at (u, phi, w); ``rigid`` is :func:`_rigid_films` at u if already computed."""
     k = problem.foundation.stiffness
-    face_h, coeffs = _face_coefficients(problem, u, w, ops)
-    h = _rigid_film(problem, u, problem.xc, problem.yc) + w
+    rigid = _rigid_films(problem, u) if rigid is None else rigid
+    face_h, coeffs = _face_coefficients(problem, rigid, w, ops)
+    h = rigid[0] + w
     A = assemble_operator(problem.grid, coeffs)
     rhs = -flux_divergence(problem.grid, coeffs)
     R = A @ phi.ravel() - rhs
@@ -237,9 +244,12 @@ def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
 def _load_derivative_h(problem, phi, h):
     """dP/dh at fixed phi (central difference of the contact table), Pa/m."""
     dh = 1e-6 * problem.sigma
-    plus = _load(problem, phi, h + dh)
-    minus = _load(problem, phi, h - dh)
-    return ((plus[1] + plus[2][0]) - (minus[1] + minus[2][0])) / (2.0 * dh)
+    h = np.asarray(h, dtype=float)
+    phi = np.broadcast_to(phi, h.shape)
+    # both sides in one evaluation (elementwise: the same values as two)
+    _, p_fluid, contact = _load(problem, np.stack([phi, phi]), np.stack([h + dh, h - dh]))
+    total = p_fluid + contact[0]
+    return (total[0] - total[1]) / (2.0 * dh)
 
 
 @dataclass
@@ -533,7 +543,8 @@ def coupled_state(problem, u):
     mem = _memory(problem)
     sigma = problem.sigma
     phi, w = _start(problem, u, mem)
-    ev = _evaluate(problem, u, phi, w, ops)
+    rigid = _rigid_films(problem, u)  # fixed while (phi, w) are solved at this u
+    ev = _evaluate(problem, u, phi, w, ops, rigid)
     lin, prev = mem.lin, None
     for _ in range(_MAX_INNER):
         dphi = dw = None
@@ -566,7 +577,7 @@ def coupled_state(problem, u):
                 f"the slurry pressure diverges (unknown up to {np.nanmax(phi):.3g}) on the compliant pad at a minimum "
                 f"film of {h.min() / sigma:.3g} sigma"
             )
-        ev = _evaluate(problem, u, phi, w, ops)
+        ev = _evaluate(problem, u, phi, w, ops, rigid)
         if scale == 1.0 and size < _STEP_TOL:
             break
         prev = size if scale == 1.0 else None
