@@ -53,7 +53,15 @@ from .grid import face_operators as _face_operators
 # the pad stack's kernels moved to cmpsim.padstack; re-exported here, where they were public
 from .padstack import *  # noqa: F403
 from .padstack import __all__ as _PADSTACK
-from .reynolds import FaceCoefficients, assemble_operator, assembly_map, factorize, flux_divergence, lubrication_coefficients
+from .reynolds import (
+    FaceCoefficients,
+    assemble_operator,
+    assembly_map,
+    factorize,
+    flux_divergence,
+    lubrication_coefficients,
+    own_face_fluxes,
+)
 from .state import EquilibriumError, PressureState
 
 __all__ = [
@@ -460,18 +468,8 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     plus = _coefficients(problem, hr + eps, ha + eps)
     d_rad = tuple((a - b) / eps for a, b in zip(plus.radial, ev.coeffs.radial))
     d_ang = tuple((a - b) / eps for a, b in zip(plus.angular, ev.coeffs.angular))
-    zero = tuple(np.zeros_like(a) for a in d_rad)
-    s_rad = np.empty(grid.size)
-    s_ang = np.empty(grid.size)
-    for parity in (0, 1):
-        mask = ops.ring_parity == parity
-        dc = FaceCoefficients(tuple(a * mask for a in d_rad), zero)
-        r = assemble_operator(grid, dc) @ phi + flux_divergence(grid, dc)
-        s_rad[mask.ravel()] = r[mask.ravel()]
-        mask = ops.sector_parity == parity
-        dc = FaceCoefficients(zero, tuple(a * mask for a in d_ang))
-        r = assemble_operator(grid, dc) @ phi + flux_divergence(grid, dc)
-        s_ang[mask.ravel()] = r[mask.ravel()]
+    # each face's flux slope is the part of its own cell's row that belongs to it
+    s_rad, s_ang = own_face_fluxes(grid, FaceCoefficients(d_rad, d_ang), phi)
     ar = ev.contact[1] + ev.contact[2] + ev.contact[3]
     P_phi = ((1.0 - ar) * _slurry_pressure(problem, ev.phi)[2]).ravel()
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()

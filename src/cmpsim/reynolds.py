@@ -54,6 +54,7 @@ __all__ = [
     "assemble_operator",
     "face_fluxes",
     "flux_divergence",
+    "own_face_fluxes",
     "ReynoldsSystem",
     "LinearSolveStats",
     "refine",
@@ -343,6 +344,43 @@ def flux_divergence(grid: PolarGrid, coeffs: FaceCoefficients) -> np.ndarray:
     div[1:, :] -= fr[:-1, :]
     div += fa - np.roll(fa, 1, axis=1)
     return div.ravel()
+
+
+_OWN_FACES: dict = {}
+
+
+def _own_face_entries(grid: PolarGrid):
+    """The entries of :func:`_operator_entries` that give a cell's flux through its own faces
+    (row = the face's cell): (face, src, col, weight, radial?)."""
+    own = _OWN_FACES.get(grid)
+    if own is None:
+        N = grid.size
+        rows, cols, src, wts = _operator_entries(grid)
+        keep = rows == src % N
+        src = src[keep]
+        own = (src % N, src, cols[keep], wts[keep], src < 2 * N)
+        if len(_OWN_FACES) > 16:
+            _OWN_FACES.clear()
+        _OWN_FACES[grid] = own
+    return own
+
+
+def own_face_fluxes(grid: PolarGrid, coeffs: FaceCoefficients, phi) -> tuple[np.ndarray, np.ndarray]:
+    """Outward flux (m^3/s) of the field ``phi`` through each cell's own faces, flat (size,) each.
+
+    ``(radial, angular)``: through the outer radial face and the counter-clockwise angular face
+    of each cell, -D grad(phi) . n L + q . n L with the face coefficients ``coeffs``: the terms
+    of the cell's row of A phi + :func:`flux_divergence` that belong to those faces. With
+    coefficient derivatives in ``coeffs`` these are the face-flux slopes of the coupled pad solve.
+    """
+    amap = assembly_map(grid)
+    N = grid.size
+    face, src, col, wts, radial = _own_face_entries(grid)
+    terms = wts * _stacked_components(amap, coeffs)[src] * np.asarray(phi, dtype=float).ravel()[col]
+    fr, fa = face_fluxes(grid, coeffs)
+    rad = np.bincount(face[radial], terms[radial], minlength=N) + fr.ravel()
+    ang = np.bincount(face[~radial], terms[~radial], minlength=N) + fa.ravel()
+    return rad, ang
 
 
 def factorize(A: sp.spmatrix):
