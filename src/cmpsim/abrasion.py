@@ -195,12 +195,18 @@ def interference(load, radius, e_star, hardness, k):
     f_p = sphere_load(wp, R, e_star, hardness, k)
     elastic = (3.0 * np.maximum(F, 0.0) / (4.0 * e_star * np.sqrt(R))) ** (2.0 / 3.0)
     plastic = F / (2.0 * np.pi * R * hardness)
-    lo, hi = np.log(we), np.log(wp)
-    for _ in range(_BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        below = sphere_load(np.exp(mid), R, e_star, hardness, k) < F
-        lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
-    return np.where(F < f_e, elastic, np.where(F < f_p, np.exp(0.5 * (lo + hi)), plastic))
+    # bisect only where the load falls in the elastic-plastic range (elementwise, so the same bits)
+    between = (F >= f_e) & (F < f_p)
+    ep = np.array(we)  # placeholder outside the range, never selected below
+    if np.any(between):
+        Fb, Rb = F[between], R[between]
+        lo, hi = np.log(we[between]), np.log(wp[between])
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            below = sphere_load(np.exp(mid), Rb, e_star, hardness, k) < Fb
+            lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
+        ep[between] = np.exp(0.5 * (lo + hi))
+    return np.where(F < f_e, elastic, np.where(F < f_p, ep, plastic))
 
 
 def groove_area(radius, depth):
@@ -245,14 +251,18 @@ def pad_gap(real_pressure, diameters, counts, pad_pressure):
     def carried(g):
         return np.sum(counts * pad_force(x - g, 0.5 * x, pad_pressure), axis=-1, keepdims=True)
 
-    lo = np.zeros_like(p_r)
-    hi = np.full_like(p_r, x.max())
-    dense = carried(lo) > p_r
-    for _ in range(_BISECTIONS):
-        mid = 0.5 * (lo + hi)
-        over = carried(mid) > p_r
-        lo, hi = np.where(over, mid, lo), np.where(over, hi, mid)
-    return np.where(dense, 0.5 * (lo + hi), 0.0)[..., 0]
+    dense = carried(np.zeros_like(p_r)) > p_r
+    gap = np.zeros_like(p_r)
+    if np.any(dense):  # bisect only where the particles carry the load (elementwise: the same bits)
+        target = p_r[dense][:, None]
+        lo = np.zeros_like(target)
+        hi = np.full_like(target, x.max())
+        for _ in range(_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            over = carried(mid) > target
+            lo, hi = np.where(over, mid, lo), np.where(over, hi, mid)
+        gap[dense] = 0.5 * (lo + hi)[:, 0]
+    return gap[..., 0]
 
 
 def summit_sharing(mean_count, wrap_count, real_pressure, diameters, counts, pad_pressure, film_groove):

@@ -53,7 +53,7 @@ from .grid import face_operators as _face_operators
 # the pad stack's kernels moved to cmpsim.padstack; re-exported here, where they were public
 from .padstack import *  # noqa: F403
 from .padstack import __all__ as _PADSTACK
-from .reynolds import FaceCoefficients, factorize, lubrication_coefficients
+from .reynolds import FaceCoefficients, coupled_newton_matrices, factorize, lubrication_coefficients
 from .state import EquilibriumError, PressureState
 
 __all__ = [
@@ -185,10 +185,15 @@ class _Evaluation:
         return self.p_fluid + self.contact[0]
 
 
-def _face_coefficients(problem, u, w, ops) -> tuple:
+def _rigid_films(problem, u) -> tuple:
+    """The rigid film (m) at the cell centres, on the radial and on the angular faces at u."""
+    return tuple(_rigid_film(problem, u, x, y) for x, y in ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya)))
+
+
+def _face_coefficients(problem, rigid, w, ops) -> tuple:
     wf = w.ravel()
-    hr = _rigid_film(problem, u, problem.xr, problem.yr) + (ops.interp_radial @ wf).reshape(w.shape)
-    ha = _rigid_film(problem, u, problem.xa, problem.ya) + (ops.interp_angular @ wf).reshape(w.shape)
+    hr = rigid[1] + (ops.interp_radial @ wf).reshape(w.shape)
+    ha = rigid[2] + (ops.interp_angular @ wf).reshape(w.shape)
     return (hr, ha), _coefficients(problem, hr, ha)
 
 
@@ -217,10 +222,12 @@ def _load(problem, phi, h):
     return p_slurry, (1.0 - ar) * gauge, contact
 
 
-def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
+def _evaluate(problem, u, phi, w, ops, rigid=None) -> _Evaluation:
+    """Residuals at (u, phi, w); ``rigid`` is :func:`_rigid_films` at u if already computed."""
     k = problem.foundation.stiffness
-    face_h, coeffs = _face_coefficients(problem, u, w, ops)
-    h = _rigid_film(problem, u, problem.xc, problem.yc) + w
+    rigid = _rigid_films(problem, u) if rigid is None else rigid
+    face_h, coeffs = _face_coefficients(problem, rigid, w, ops)
+    h = rigid[0] + w
     R, A = problem.slurry.residual(problem.grid, coeffs, phi)
     p_abs, p_fluid, contact = _load(problem, phi, h)
     f = problem.foundation
@@ -234,9 +241,12 @@ def _evaluate(problem, u, phi, w, ops) -> _Evaluation:
 def _load_derivative_h(problem, phi, h):
     """dP/dh at fixed phi (central difference of the contact table), Pa/m."""
     dh = 1e-6 * problem.sigma
-    plus = _load(problem, phi, h + dh)
-    minus = _load(problem, phi, h - dh)
-    return ((plus[1] + plus[2][0]) - (minus[1] + minus[2][0])) / (2.0 * dh)
+    h = np.asarray(h, dtype=float)
+    phi = np.broadcast_to(phi, h.shape)
+    # both sides in one evaluation (elementwise: the same values as two)
+    _, p_fluid, contact = _load(problem, np.stack([phi, phi]), np.stack([h + dh, h - dh]))
+    total = p_fluid + contact[0]
+    return (total[0] - total[1]) / (2.0 * dh)
 
 
 @dataclass
@@ -368,23 +378,13 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     plus = _coefficients(problem, hr + eps, ha + eps)
     d_rad = tuple((a - b) / eps for a, b in zip(plus.radial, ev.coeffs.radial))
     d_ang = tuple((a - b) / eps for a, b in zip(plus.angular, ev.coeffs.angular))
-    zero = tuple(np.zeros_like(a) for a in d_rad)
-    s_rad = np.empty(grid.size)
-    s_ang = np.empty(grid.size)
-    flux_change = problem.slurry.flux_change
-    for parity in (0, 1):
-        mask = ops.ring_parity == parity
-        r = flux_change(grid, ev.coeffs, FaceCoefficients(tuple(a * mask for a in d_rad), zero), phi)
-        s_rad[mask.ravel()] = r[mask.ravel()]
-        mask = ops.sector_parity == parity
-        r = flux_change(grid, ev.coeffs, FaceCoefficients(zero, tuple(a * mask for a in d_ang)), phi)
-        s_ang[mask.ravel()] = r[mask.ravel()]
-    R_w = (ops.div_radial @ sp.diags(s_rad) @ ops.interp_radial + ops.div_angular @ sp.diags(s_ang) @ ops.interp_angular).tocsr()
+    # each face's flux slope: the slurry model knows how its residual depends on the coefficients
+    s_rad, s_ang = problem.slurry.face_flux_slopes(grid, ev.coeffs, FaceCoefficients(d_rad, d_ang), phi, ops)
     ar = ev.contact[1] + ev.contact[2] + ev.contact[3]
     P_phi = ((1.0 - ar) * _slurry_pressure(problem, ev.phi)[2]).ravel()
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
     K = k - P_h
-    S = (ev.matrix + R_w @ sp.diags(P_phi / K)).tocsr()
+    R_w, S = coupled_newton_matrices(grid, ev.matrix, s_rad, s_ang, P_phi / K)
     factor = (problem.solver or factorize)(S)
     problem.factorizations += 1
     lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
@@ -452,7 +452,8 @@ def coupled_state(problem, u):
     mem = _memory(problem)
     sigma = problem.sigma
     phi, w = _start(problem, u, mem)
-    ev = _evaluate(problem, u, phi, w, ops)
+    rigid = _rigid_films(problem, u)  # fixed while (phi, w) are solved at this u
+    ev = _evaluate(problem, u, phi, w, ops, rigid)
     lin, prev = mem.lin, None
     for _ in range(_MAX_INNER):
         dphi = dw = None
@@ -485,7 +486,7 @@ def coupled_state(problem, u):
                 f"the slurry pressure diverges (unknown up to {np.nanmax(phi):.3g}) on the compliant pad at a minimum "
                 f"film of {h.min() / sigma:.3g} sigma"
             )
-        ev = _evaluate(problem, u, phi, w, ops)
+        ev = _evaluate(problem, u, phi, w, ops, rigid)
         if scale == 1.0 and size < _STEP_TOL:
             break
         prev = size if scale == 1.0 else None

@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-__all__ = ["BACKWARD_ERROR_LIMIT", "FALLBACKS", "GuardedFactor", "factorize", "backward_error"]
+__all__ = ["BACKWARD_ERROR_LIMIT", "FALLBACKS", "SUPERNODES", "GuardedFactor", "factorize", "backward_error"]
 
 #: Largest normwise backward error accepted from a solve without row pivoting, about 1e6 x the
 #: unit round-off: the coupled systems measure 1e-16 to 1e-14 without pivoting (``tests/test_sparse.py``).
@@ -40,6 +40,13 @@ FALLBACKS = {"partial_pivoting": 0}
 #: The fill-reducing column ordering: the operators have a symmetric pattern, so a minimum
 #: degree of A^T + A fills least (3x faster than the default COLAMD on the default grid).
 ORDERING = "MMD_AT_PLUS_A"
+
+#: SuperLU's supernode relaxation and panel size for the diagonal-pivot factorisation: small
+#: panels suit the narrow supernodes of these 2-D five- and nine-point operators. Measured on the
+#: coupled pad matrices (3 in, 24x64 and fine 64x124; 300 mm fine) and the paper preset's
+#: Reynolds operator (24x64, 96x256): 12-25 % less time per factorisation than scipy's
+#: defaults (SuperLU's ``sp_ienv``), the same ordering and fill (benchmarks/README.md, bench_scale).
+SUPERNODES = {"relax": 1, "panel_size": 4}
 
 _LOG = logging.getLogger(__name__)
 
@@ -90,7 +97,9 @@ class GuardedFactor:
         self._checked = False
         self._norm = float(abs(self.matrix).sum(axis=1).max()) if self.matrix.nnz else 0.0
         try:
-            self._lu = spla.splu(self.matrix, permc_spec=ORDERING, diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+            self._lu = spla.splu(
+                self.matrix, permc_spec=ORDERING, diag_pivot_thresh=0.0, options={"SymmetricMode": True}, **SUPERNODES
+            )
             self.pivoting = "diagonal"
         except RuntimeError as exc:  # a zero pivot on the diagonal
             self._fall_back(f"diagonal pivoting failed ({exc})")

@@ -26,7 +26,7 @@ from ..cavitation import CavitationSystem, upwind_couette_matrix
 from ..flowfactors import shear_stress_factors
 from ..grainflow import GrainFlow, grain_coefficients
 from ..removal import newtonian_shear_stress, slurry_shear_stress
-from ..reynolds import NEWTONIAN_GRAIN_COEFFICIENT, assemble_operator, flux_divergence
+from ..reynolds import NEWTONIAN_GRAIN_COEFFICIENT, FaceCoefficients, assemble_operator, flux_divergence, own_face_fluxes
 
 __all__ = ["NoCavitation", "GumbelCavitation", "JFOCavitation", "GranularSlurry", "NewtonianSlurry", "FILL_SCALE"]
 
@@ -89,6 +89,16 @@ class NoCavitation:
         coefficients it is taken at (unused here: no upwinding).
         """
         return assemble_operator(grid, dcoeffs) @ np.asarray(phi).ravel() + flux_divergence(grid, dcoeffs)
+
+    def face_flux_slopes(self, grid, coeffs, dcoeffs, phi, ops):
+        """(radial, angular) slope of each cell's own outer-radial and counter-clockwise face flux
+        under the face-coefficient derivatives ``dcoeffs``, m^3/s per m of film (flat, size N each).
+
+        The system is linear in the coefficients, so each slope is the part of its own cell's row of
+        :meth:`flux_change` that belongs to that face: :func:`cmpsim.reynolds.own_face_fluxes`, one
+        pass (``coeffs`` and ``ops`` unused here).
+        """
+        return own_face_fluxes(grid, dcoeffs, phi)
 
 
 class GumbelCavitation(NoCavitation):
@@ -204,6 +214,25 @@ class JFOCavitation(NoCavitation):
         B, c = upwind_couette_matrix(grid, dcoeffs, direction=coeffs)
         return assemble_operator(grid, dcoeffs) @ self.linearised(psi)[0] + B @ self.fill_fraction(psi) + c
 
+    def face_flux_slopes(self, grid, coeffs, dcoeffs, psi, ops):
+        """The face-flux slopes of :meth:`NoCavitation.face_flux_slopes` for the JFO mass balance.
+
+        Its Couette flux is upwinded by the direction of ``coeffs``' flux, so the slopes are taken
+        from :meth:`flux_change` on every second ring (sector) at a time: the faces of one parity
+        touch disjoint cells, and each cell's change is then its own face's slope.
+        """
+        zero = tuple(np.zeros_like(a) for a in dcoeffs.radial)
+        s_rad = np.empty(grid.size)
+        s_ang = np.empty(grid.size)
+        for parity in (0, 1):
+            mask = ops.ring_parity == parity
+            r = self.flux_change(grid, coeffs, FaceCoefficients(tuple(a * mask for a in dcoeffs.radial), zero), psi)
+            s_rad[mask.ravel()] = r[mask.ravel()]
+            mask = ops.sector_parity == parity
+            r = self.flux_change(grid, coeffs, FaceCoefficients(zero, tuple(a * mask for a in dcoeffs.angular)), psi)
+            s_ang[mask.ravel()] = r[mask.ravel()]
+        return s_rad, s_ang
+
 
 # ---------------------------------------------------------------------------------- slurries
 class GranularSlurry:
@@ -278,6 +307,10 @@ class GranularSlurry:
     def flux_change(self, grid, coeffs, dcoeffs, phi):
         """The change of :meth:`residual` under a change ``dcoeffs`` of the face coefficients at fixed phi."""
         return self.cavitation.flux_change(grid, coeffs, dcoeffs, phi)
+
+    def face_flux_slopes(self, grid, coeffs, dcoeffs, phi, ops):
+        """Slopes of each cell's own face fluxes under ``dcoeffs`` (the coupled pad's Jacobian), m^3/s per m."""
+        return self.cavitation.face_flux_slopes(grid, coeffs, dcoeffs, phi, ops)
 
     def edge_pressure(self, ambient_pressure: float) -> float:
         """The slurry pressure at the wafer edge reported as ``ambient_pressure``: p0, Pa."""
