@@ -119,25 +119,26 @@ def test_incoming_needs_a_polish_time_that_leaves_film_everywhere(incoming_pair)
         cmpsim.tune_zones(cfg, incoming=(np.array([0.0, 0.03]), np.array([1e-6, 1e-6])), polish_time=60.0)
 
 
-@pytest.mark.parametrize(
-    "text, message",
-    [
-        ("", "is empty"),
-        ("radius_mm,thickness_furlong\n0,1\n38.1,1\n", "unit 'furlong' not known; use one of m, mm, um, nm, angstrom"),
-        ("r_mm,thickness_nm\n0,1\n38.1,1\n", "header column 'r_mm' is not radius_<unit> or thickness_<unit>"),
-        ("radius_mm,radius_nm\n0,1\n38.1,1\n", "names the radius column twice"),
-        ("radius_mm,thickness_nm\n0,1\n", "has 1 data rows"),
-        ("radius_mm,thickness_nm\n0,1\n38.1,x\n", "row 3 is not two numbers"),
-        ("radius_mm,thickness_nm\n0,1,2\n38.1,1\n", "row 2 has 3 values"),
-        ("radius_mm,thickness_nm\n10,1\n5,1\n", "strictly increasing"),
-        ("radius_mm,thickness_nm\n0,1\n38.1,-1\n", "thickness must be positive"),
-    ],
-)
-def test_bad_incoming_files_are_named(tmp_path, text, message):
-    path = tmp_path / "in.csv"
-    path.write_text(text)
+# what a bad incoming file must be refused with -> the file
+BAD_INCOMING = {
+    "is empty": "",
+    "unit 'furlong' not known; use one of m, mm, um, nm, angstrom": "radius_mm,thickness_furlong\n0,1\n38.1,1\n",
+    "header column 'r_mm' is not radius_<unit> or thickness_<unit>": "r_mm,thickness_nm\n0,1\n38.1,1\n",
+    "names the radius column twice": "radius_mm,radius_nm\n0,1\n38.1,1\n",
+    "has 1 data rows": "radius_mm,thickness_nm\n0,1\n",
+    "row 3 is not two numbers": "radius_mm,thickness_nm\n0,1\n38.1,x\n",
+    "row 2 has 3 values": "radius_mm,thickness_nm\n0,1,2\n38.1,1\n",
+    "strictly increasing": "radius_mm,thickness_nm\n10,1\n5,1\n",
+    "thickness must be positive": "radius_mm,thickness_nm\n0,1\n38.1,-1\n",
+}
+
+
+@pytest.mark.parametrize("message", BAD_INCOMING)
+def test_bad_incoming_files_are_named(tmp_path, message):
+    bad = tmp_path / "in.csv"
+    bad.write_text(BAD_INCOMING[message])
     with pytest.raises(ValueError, match=re.escape(message)):
-        read_incoming(path)
+        read_incoming(bad)
 
 
 def test_the_thickness_column_may_come_first_in_any_known_unit(tmp_path):
