@@ -111,6 +111,8 @@ def test_incoming_needs_a_polish_time_that_leaves_film_everywhere(incoming_pair)
         cmpsim.tune_zones(cfg, incoming=path)
     with pytest.raises(ValueError, match="incoming and polish_time go together"):
         cmpsim.tune_zones(cfg, polish_time="60 s")
+    with pytest.raises(ValueError, match=r"a \(radius, thickness\) pair of arrays in m; got 3 items"):
+        cmpsim.tune_zones(cfg, incoming=([0.0, 0.04],) * 3, polish_time=60.0)
     with pytest.raises(ValueError, match="polish_time must be > 0 s"):
         cmpsim.tune_zones(cfg, incoming=path, polish_time="0 s")
     with pytest.raises(ValueError, match=r"polish_time = 600 s removes more than the incoming thickness at the start"):

@@ -117,7 +117,9 @@ class ZoneTuning:
     zone response d RR_i / d P_k (rings x zones, m/s/Pa); ``solves`` the operating points solved.
     With an incoming profile: ``polish_time`` (s), ``remaining_thickness`` (radius, thickness; m)
     and ``remaining_nonuniformity`` (fraction) of the tuned pressures, and the same in ``before``;
-    ``within_wafer_nonuniformity`` stays that of the removal profile.
+    ``within_wafer_nonuniformity`` stays that of the removal profile; ``history`` holds
+    (pressures, objective) of each accepted step, the objective being the remaining thickness's
+    non-uniformity then.
     """
 
     zone_radii: tuple
@@ -294,7 +296,12 @@ def tune_zones(
     if (incoming is None) != (polish_time is None):
         raise ValueError("incoming and polish_time go together: give both (the incoming thickness profile and the polish time) or neither")
     if incoming is not None:
-        incoming = read_incoming(incoming) if isinstance(incoming, (str, Path)) else _checked_incoming(*incoming)
+        if isinstance(incoming, (str, Path)):
+            incoming = read_incoming(incoming)
+        elif len(incoming) == 2:
+            incoming = _checked_incoming(*incoming)
+        else:
+            raise ValueError(f"incoming must be a CSV path or a (radius, thickness) pair of arrays in m; got {len(incoming)} items")
         polish_time = to_si(polish_time, "s", "polish_time", example="min")
         if not (np.isfinite(polish_time) and polish_time > 0):
             raise ValueError(f"polish_time must be > 0 s; got {polish_time:g} s")
