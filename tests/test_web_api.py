@@ -377,7 +377,7 @@ def test_the_page_and_its_scripts_are_served_with_their_types(client):
         assert r.status_code == 200 and r.headers["content-type"].startswith("text/javascript"), name
         seen.add(name)
         todo += [m for m in re.findall(r'from "\./([\w.-]+\.js)"', r.text) if m not in seen]
-    assert {"form.js", "plots.js", "sweep.js", "results.js"} <= seen, seen
+    assert {"form.js", "plots.js", "sweep.js", "results.js", "tune.js"} <= seen, seen
     page = client.get("/").text + "".join(client.get(f"/static/{n}").text for n in sorted(seen))
     assert "/static/plotly.min.js" in page and "http://" not in page and "https://" not in page
 

@@ -190,6 +190,65 @@ def test_a_failed_sweep_point_is_shown_with_its_message(page, server):
     assert len(failures) == 2 and all("no equilibrium" in f and "applied_pressure = " in f for f in failures)
 
 
+def _membrane(page, server):
+    _open(page, server)
+    assert page.is_disabled("#tune-zones")  # the rigid head has no zones to tune
+    page.select_option('#inputs [name="carrier"]', "membrane")
+    page.fill('#inputs [name="zone_radii"]', "20,38.1")
+    assert page.is_enabled("#tune-zones")
+
+
+def test_a_membrane_solve_marks_the_zone_boundaries_in_the_profile(page, server):
+    _membrane(page, server)
+    page.click("#solve")
+    page.wait_for_selector("#profile .main-svg")
+    shapes = page.evaluate("document.getElementById('profile').layout.shapes")
+    assert [(s["x0"], s["x1"], s["line"]["dash"]) for s in shapes] == [(20.0, 20.0, "dash"), (38.1, 38.1, "dash")]
+    labels = page.evaluate("document.getElementById('profile').layout.annotations.map(a => a.text)")
+    assert labels == ["zone 1 | 20 mm", "zone 2 | 38.1 mm"]
+    # back on the rigid head: no boundaries, and nothing to tune
+    page.select_option('#inputs [name="carrier"]', "rigid")
+    page.fill('#inputs [name="zone_radii"]', "")
+    assert page.is_disabled("#tune-zones")
+    page.click("#solve")
+    page.wait_for_function("(document.getElementById('profile').layout.shapes || []).length === 0")
+
+
+def test_tune_zones_fills_the_zone_pressures_and_flattens_the_profile(page, server):
+    _membrane(page, server)
+    page.fill('#inputs [name="zone_pressures"]', "3,5")  # a start away from the flat profile
+    page.click("#tune-zones")
+    page.wait_for_selector("#tune-profile .main-svg")
+    before = float(page.get_attribute("#tune-summary", "data-before"))
+    after = float(page.get_attribute("#tune-summary", "data-after"))
+    assert after < before
+    expected = cmpsim.tune_zones(Config.default().replace(grid="coarse", carrier="membrane", zone_radii="20,38.1 mm", zone_pressures="3,5 psi"))
+    assert after == pytest.approx(expected.within_wafer_nonuniformity, rel=1e-9)
+    filled = page.input_value('#inputs [name="zone_pressures"]')
+    psi = 6894.757293168361
+    assert [float(v) for v in filled.split(",")] == pytest.approx([p / psi for p in expected.zone_pressures], rel=1e-5)
+    rows = page.eval_on_selector_all("#tune-table tbody tr", "rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+    assert [float(r[4]) for r in rows] == pytest.approx(list(expected.zone_pressures), rel=1e-5)
+    traces = page.evaluate("document.getElementById('tune-profile').data.map(t => t.name)")
+    assert traces == ["before", "tuned"]
+    assert len(page.evaluate("document.getElementById('tune-profile').layout.shapes")) == 2
+    # the tuned pressures in the form solve as they are
+    page.click("#solve")
+    page.wait_for_function("document.getElementById('status').textContent.startsWith('Solved')")
+    assert page.is_hidden("#message")
+
+
+def test_a_failed_tuning_shows_the_apis_message(page, server):
+    _membrane(page, server)
+    page.fill('#inputs [name="zone_pressures"]', "3,5,6")  # three pressures for two zones
+    page.click("#tune-zones")
+    page.wait_for_selector("#message:not([hidden])")
+    with pytest.raises(ValueError) as info:
+        Config.default().replace(carrier="membrane", zone_radii="20,38.1 mm", zone_pressures="3,5,6 psi")
+    assert str(info.value) in page.text_content("#message") + page.text_content(".error:not(:empty)")
+    assert page.is_hidden("#tune")
+
+
 def test_the_api_reference_page_is_served_by_cmpsim_itself(page, server):
     page.goto(server.url + "/api/docs")
     page.wait_for_selector(".route h2")

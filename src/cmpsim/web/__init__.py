@@ -12,7 +12,7 @@ answers to JSON, the 422 of bad input), :mod:`~cmpsim.web.page` (the page's file
 sweeps), :mod:`~cmpsim.web.guard` (the token), :mod:`~cmpsim.web.limits` (what one client may
 ask of the machine), :mod:`~cmpsim.web.server` (running it with uvicorn). The page itself is
 ``static/``: HTML, CSS and ES modules by job (``app.js`` starts the page and imports
-``page.js``, ``http.js``, ``form.js``, ``results.js``, ``plots.js``, ``sweep.js``); its
+``page.js``, ``http.js``, ``form.js``, ``results.js``, ``plots.js``, ``sweep.js``, ``tune.js``); its
 plotting library is the plotly.js bundled in the installed ``plotly`` wheel, so no request
 leaves the machine.
 

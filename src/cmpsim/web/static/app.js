@@ -3,32 +3,23 @@
 // number gets the display unit appended), and draws what the API answers. This module starts
 // the page and solves one point; the others each do one job: page.js (state, messages),
 // http.js (the API), form.js (the inputs), results.js (the table, downloads), plots.js (maps,
-// profile), sweep.js (the sweep panel).
+// profile), sweep.js (the sweep panel), tune.js (zone tuning of a membrane head).
 
-import { state, $, clearErrors, showMessage, showFieldError } from "./page.js";
+import { state, $, showMessage, beginAction, showActionError } from "./page.js";
 import { api, errorText } from "./http.js";
 import { buildForm, collectInputs, resetForm } from "./form.js";
 import { OUTPUTS, renderResults, setDownloads, downloadNetcdf } from "./results.js";
 import { ensurePlotly, renderPlots } from "./plots.js";
+import { syncTuneButton, tuneZones } from "./tune.js";
 import { buildSweepPanel, runSweep, cancelSweep, drawSweep } from "./sweep.js";
 
 async function solve() {
-  clearErrors($("inputs"));
-  showMessage("message", "");
   const body = collectInputs();
-  $("solve").disabled = true;
-  $("status").textContent = "Solving\u2026";
-  const t0 = performance.now();
+  const t0 = beginAction("solve", "Solving\u2026");
   const r = await api("POST", "/api/solve?include=fields", body);
   $("solve").disabled = false;
   if (!r.ok) {
-    $("status").textContent = "";
-    const text = errorText(r);
-    if (r.status === 422 && showFieldError(r.data.parameter, text)) {
-      showMessage("message", `Check ${r.data.parameter}: ${text}`);
-    } else {
-      showMessage("message", text);
-    }
+    showActionError(r, errorText(r));
     return;
   }
   const data = r.data;
@@ -64,12 +55,15 @@ async function main() {
     $("version").textContent += ` \u00b7 limits: grid up to ${l.max_grid} (${l.max_grid_cells} cells), sweeps up to ${l.max_sweep_points} points, ${l.max_jobs} jobs at once`;
   }
   $("solve").addEventListener("click", solve);
-  $("reset").addEventListener("click", resetForm);
+  $("reset").addEventListener("click", () => { resetForm(); syncTuneButton(); });
+  $("tune-zones").addEventListener("click", tuneZones);
+  $("inputs").addEventListener("change", syncTuneButton);
   $("run-sweep").addEventListener("click", runSweep);
   $("cancel-sweep").addEventListener("click", cancelSweep);
   $("sweep-output").addEventListener("change", () => ensurePlotly().then(drawSweep));
   $("download-netcdf").addEventListener("click", downloadNetcdf);
   for (const id of ["solve", "reset", "run-sweep"]) $(id).disabled = false;
+  syncTuneButton();
   document.body.dataset.ready = "true";
 }
 

@@ -40,6 +40,24 @@ export function showFieldError(name, text) {
   return true;
 }
 
+// The start of a call from the actions row: old messages cleared, the button off, the status set;
+// returns the start time (ms).
+export function beginAction(buttonId, status) {
+  clearErrors($("inputs"));
+  showMessage("message", "");
+  $(buttonId).disabled = true;
+  $("status").textContent = status;
+  return performance.now();
+}
+
+// A refused call of the actions row: the API's message beside the input it names (422), else in
+// the message box, with `prefix` before it.
+export function showActionError(r, text, prefix = "") {
+  $("status").textContent = "";
+  if (r.status === 422 && showFieldError(r.data.parameter, text)) showMessage("message", `Check ${r.data.parameter}: ${text}`);
+  else showMessage("message", prefix + text);
+}
+
 export function saveBlob(blob, name) {
   const a = document.createElement("a");
   a.href = URL.createObjectURL(blob);

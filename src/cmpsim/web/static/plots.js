@@ -68,6 +68,17 @@ export function renderPlots(data, fields) {
   renderProfile(data);
 }
 
+// Dashed vertical lines at the outer radius of each zone of a membrane head (inputs in SI, as the
+// solve echoes them; zone_radii unset = one zone over the wafer), labelled; none on a rigid head.
+export function zoneBoundaries(inputs) {
+  if (!inputs || inputs.carrier !== "membrane") return { shapes: [], annotations: [] };
+  let radii = Array.isArray(inputs.zone_radii) ? inputs.zone_radii : [];
+  if (radii.length === 0 && typeof inputs.wafer_diameter === "number") radii = [inputs.wafer_diameter / 2];
+  const shapes = radii.map((r) => ({ type: "line", xref: "x", yref: "paper", x0: r * 1e3, x1: r * 1e3, y0: 0, y1: 1, line: { dash: "dash", width: 1, color: "#888" }, name: "zone boundary" }));
+  const annotations = radii.map((r, k) => ({ x: r * 1e3, xref: "x", y: 1, yref: "paper", yanchor: "top", xanchor: "right", showarrow: false, font: { size: 10, color: "#666" }, text: `zone ${k + 1} | ${Number((r * 1e3).toPrecision(4))} mm` }));
+  return { shapes, annotations };
+}
+
 function renderProfile(data) {
   const div = $("profile");
   const prof = data.profiles;
@@ -90,6 +101,7 @@ function renderProfile(data) {
     yaxis: { title: { text: `removal rate (${unit})` } },
     margin: { l: 60, r: 60, t: 40, b: 45 },
     legend: { orientation: "h", y: -0.25 },
+    ...zoneBoundaries(data.inputs),
   };
   if (Array.isArray(prof.film_thickness)) {
     const [g, fu] = shownUnit("m");
