@@ -1,6 +1,7 @@
 """Zone tuning of the membrane head (cmpsim.tune_zones, cmpsim tune-zones; issue 25)."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -9,6 +10,7 @@ from click.testing import CliRunner
 import cmpsim
 from cmpsim.cli import main
 from cmpsim.config import Config, zone_mean_pressure
+from cmpsim.tuning import read_incoming
 
 PSI = 6894.757293168361
 HEAD = dict(carrier="membrane", zone_radii="10,20,30,38.1 mm")  # the default (edge-graded) grid
@@ -65,3 +67,99 @@ def test_the_command_prints_one_json_object_with_the_contracted_keys():
     assert len(data["zone_pressures"]) == 2 and data["units"]["zone_pressures"] == "Pa"
     assert len(data["profile"]["radius"]) == len(data["profile"]["rate"]) == 8
     assert 0 <= data["within_wafer_nonuniformity"] <= data["before"]["within_wafer_nonuniformity"]
+
+
+# ---- an incoming thickness profile flattened after a polish time (issue 25) ----
+COARSE = dict(carrier="membrane", zone_radii="20,38.1 mm", grid="8x24")
+EDGE_THICK = "radius_mm,thickness_nm\n" + "".join(f"{r:.4f},{1000 + 5 * (r / 38.1) ** 2:.6f}\n" for r in np.linspace(0.0, 38.1, 20))
+
+
+@pytest.fixture(scope="module")
+def incoming_pair(tmp_path_factory):
+    path = tmp_path_factory.mktemp("incoming") / "edge_thick.csv"
+    path.write_text(EDGE_THICK)
+    cfg = Config.default().replace(**COARSE)
+    flat = cmpsim.tune_zones(cfg)
+    tuned = cmpsim.tune_zones(cfg, incoming=path, polish_time="1 min")
+    return flat, tuned, path
+
+
+def test_a_film_thicker_at_the_edge_raises_the_tuned_edge_zone_and_flattens_what_is_left(incoming_pair):
+    flat, tuned, _ = incoming_pair
+    # the outer zone must remove more: its pressure relative to the inner zone's rises over the flat-profile tuning
+    # (docs/model.md 13f: 0.90 -> 2.95; the zones' weak grip sends the inner zone to its lower bound)
+    assert tuned.zone_pressures[1] / tuned.zone_pressures[0] > 2.0 * flat.zone_pressures[1] / flat.zone_pressures[0]
+    assert tuned.remaining_nonuniformity < tuned.before["remaining_nonuniformity"] / 2.0
+    assert tuned.polish_time == 60.0
+    # what is reported is t_in - RR T of the tuned profile, and its non-uniformity is the one the output weighs
+    radius = tuned.remaining_thickness["radius"]
+    r_csv = np.linspace(0.0, 0.0381, 20)  # t_in interpolated linearly from the file's points
+    t_in = np.interp(radius, r_csv, 1e-9 * (1000 + 5 * (r_csv / 0.0381) ** 2))
+    assert tuned.remaining_thickness["thickness"] == pytest.approx(t_in - 60.0 * tuned.profile["rate"], rel=1e-6)
+    again = cmpsim.solve(Config.default().replace(**COARSE, zone_pressures=tuned.zone_pressures), relative=False)
+    assert again.scalars["within_wafer_nonuniformity"] == pytest.approx(tuned.within_wafer_nonuniformity, abs=1e-6, rel=0)
+    data = tuned.to_dict()
+    assert set(data["remaining_thickness"]) == {"radius", "thickness"}
+    assert data["remaining_nonuniformity"] == tuned.remaining_nonuniformity and data["units"]["thickness"] == "m"
+    assert "remaining_thickness" not in flat.to_dict()
+
+
+def test_incoming_needs_a_polish_time_that_leaves_film_everywhere(incoming_pair):
+    _, _, path = incoming_pair
+    cfg = Config.default().replace(**COARSE)
+    with pytest.raises(ValueError, match="incoming and polish_time go together"):
+        cmpsim.tune_zones(cfg, incoming=path)
+    with pytest.raises(ValueError, match="incoming and polish_time go together"):
+        cmpsim.tune_zones(cfg, polish_time="60 s")
+    with pytest.raises(ValueError, match=r"a \(radius, thickness\) pair of arrays in m; got 3 items"):
+        cmpsim.tune_zones(cfg, incoming=([0.0, 0.04],) * 3, polish_time=60.0)
+    with pytest.raises(ValueError, match="polish_time must be > 0 s"):
+        cmpsim.tune_zones(cfg, incoming=path, polish_time="0 s")
+    with pytest.raises(ValueError, match=r"polish_time = 600 s removes more than the incoming thickness at the start"):
+        cmpsim.tune_zones(cfg, incoming=path, polish_time="10 min")
+    with pytest.raises(ValueError, match=r"covers radii 0-30 mm; it must cover 2.38125-35.7188 mm"):
+        cmpsim.tune_zones(cfg, incoming=(np.array([0.0, 0.03]), np.array([1e-6, 1e-6])), polish_time=60.0)
+
+
+# what a bad incoming file must be refused with -> the file
+BAD_INCOMING = {
+    "is empty": "",
+    "unit 'furlong' not known; use one of m, mm, um, nm, angstrom": "radius_mm,thickness_furlong\n0,1\n38.1,1\n",
+    "header column 'r_mm' is not radius_<unit> or thickness_<unit>": "r_mm,thickness_nm\n0,1\n38.1,1\n",
+    "names the radius column twice": "radius_mm,radius_nm\n0,1\n38.1,1\n",
+    "has 1 data rows": "radius_mm,thickness_nm\n0,1\n",
+    "row 3 is not two numbers": "radius_mm,thickness_nm\n0,1\n38.1,x\n",
+    "row 2 has 3 values": "radius_mm,thickness_nm\n0,1,2\n38.1,1\n",
+    "strictly increasing": "radius_mm,thickness_nm\n10,1\n5,1\n",
+    "thickness must be positive": "radius_mm,thickness_nm\n0,1\n38.1,-1\n",
+}
+
+
+@pytest.mark.parametrize("message", BAD_INCOMING)
+def test_bad_incoming_files_are_named(tmp_path, message):
+    bad = tmp_path / "in.csv"
+    bad.write_text(BAD_INCOMING[message])
+    with pytest.raises(ValueError, match=re.escape(message)):
+        read_incoming(bad)
+
+
+def test_the_thickness_column_may_come_first_in_any_known_unit(tmp_path):
+    path = tmp_path / "in.csv"
+    path.write_text("thickness_um,radius_m\n1.0,0\n1.2,0.05\n")
+    r, t = read_incoming(path)
+    assert r == pytest.approx([0.0, 0.05]) and t == pytest.approx([1e-6, 1.2e-6])
+
+
+def test_the_command_flattens_an_incoming_profile_and_refuses_one_without_the_other(tmp_path):
+    path = tmp_path / "in.csv"
+    path.write_text(EDGE_THICK)
+    base = ["tune-zones", "--grid", "8x24", "--set", "carrier=membrane", "--set", "zone_radii=20,38.1 mm"]
+    r = CliRunner().invoke(main, base + ["--json", "--incoming", str(path), "--polish-time", "60 s"])
+    assert r.exit_code == 0, r.output
+    data = json.loads(r.output)
+    assert data["remaining_nonuniformity"] < data["before"]["remaining_nonuniformity"] and data["polish_time"] == 60.0
+    assert len(data["remaining_thickness"]["thickness"]) == 8
+    r = CliRunner().invoke(main, base + ["--incoming", str(path)])
+    assert r.exit_code != 0 and "--incoming needs --polish-time" in r.output and "Traceback" not in r.output
+    r = CliRunner().invoke(main, base + ["--incoming", str(tmp_path / "missing.csv"), "--polish-time", "60 s"])
+    assert r.exit_code != 0 and "cannot read" in r.output

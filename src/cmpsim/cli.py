@@ -437,13 +437,16 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
 @config_options
 @click.option("--bounds", default="0.5,8 psi", show_default=True, metavar="LOW,HIGH UNIT", help="Bounds of every zone pressure.")
 @click.option("--keep", type=click.Choice(["pressure", "rate"]), default=None, help="Also keep the mean pressure (the load) or the mean removal rate of the start.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before.")
-def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, as_json):
+@click.option("--incoming", "incoming", type=click.Path(dir_okay=False), default=None, metavar="FILE.csv", help="Incoming thickness profile to flatten after --polish-time: CSV with header radius_<unit>,thickness_<unit> (e.g. radius_mm,thickness_nm).")
+@click.option("--polish-time", "polish_time", default=None, metavar="TIME", help="Polish time with units (e.g. '60 s', '1.5 min'); required with --incoming.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before; with --incoming also remaining_thickness (radius, thickness; m) and remaining_nonuniformity (fraction).")
+def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, incoming, polish_time, as_json):
     """Find the zone pressures of a membrane head that flatten the removal profile.
 
     Starts from the configuration's zone_pressures (or applied_pressure in every zone);
     needs --set carrier=membrane and zone_radii. Prints the pressures, the profile before
-    and after, and the within-wafer non-uniformity.
+    and after, and the within-wafer non-uniformity. With --incoming FILE.csv and
+    --polish-time, flattens the thickness left after polishing instead.
     """
     import json
 
@@ -456,7 +459,11 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, as_
         limits = parse_list(bounds, "Pa", "--bounds", example="psi")
         if len(limits) != 2:
             raise ValueError(f"--bounds takes two pressures, LOW,HIGH with one unit (e.g. '0.5,8 psi'); got {bounds!r}")
-        result = tune_zones(cfg, bounds=limits, keep=keep)
+        if incoming is not None and polish_time is None:
+            raise ValueError("--incoming needs --polish-time (e.g. --polish-time '60 s')")
+        if polish_time is not None and incoming is None:
+            raise ValueError("--polish-time needs --incoming FILE.csv (the incoming thickness profile)")
+        result = tune_zones(cfg, bounds=limits, keep=keep, incoming=incoming, polish_time=polish_time)
     except EquilibriumError as exc:
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
@@ -479,6 +486,16 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, as_
         for r, a, b in zip(result.profile["radius"], result.before["profile"]["rate"], result.profile["rate"])
     ]
     console.print(_rich_table("removal-rate profile", ["radius (mm)", "before (nm/min)", "tuned (nm/min)"], prof))
+    if result.remaining_thickness is not None:
+        left = [
+            (f"{1e3 * r:.2f}", f"{1e9 * a:.3f}", f"{1e9 * b:.3f}")
+            for r, a, b in zip(result.remaining_thickness["radius"], result.before["remaining_thickness"]["thickness"], result.remaining_thickness["thickness"])
+        ]
+        console.print(_rich_table(f"remaining thickness after {result.polish_time:g} s", ["radius (mm)", "before (nm)", "tuned (nm)"], left))
+        console.print(
+            f"remaining-thickness non-uniformity: {100 * result.before['remaining_nonuniformity']:.3f} % -> "
+            f"{100 * result.remaining_nonuniformity:.3f} %"
+        )
     console.print(
         f"within-wafer non-uniformity: {100 * result.before['within_wafer_nonuniformity']:.3f} % -> "
         f"{100 * result.within_wafer_nonuniformity:.3f} % ({result.solves} operating points solved)"

@@ -7,7 +7,9 @@ within-wafer non-uniformity times the mean:
 
     minimise  sum_i a_i (RR_i(P) - m)^2     over P (and the level m),   P_lo <= P_k <= P_hi,
 
-optionally keeping the mean pressure (the load) or the mean rate of the start. Each step is a
+optionally keeping the mean pressure (the load) or the mean rate of the start. Given an incoming
+thickness profile t_in(r) and a polish time T, the flattened quantity is instead the remaining
+thickness t_in(r) - RR(r) T (:func:`read_incoming` reads the profile from a CSV file). Each step is a
 Gauss-Newton step on the zone response J_ik = d RR_i / d P_k, measured by finite differences of
 warm-started solves (the equilibrium and the wafer's bending of the current pressures as the
 start), solved as a bounded linear least-squares problem (:func:`scipy.optimize.lsq_linear`,
@@ -19,16 +21,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import csv
+from pathlib import Path
+
 import numpy as np
 from scipy.optimize import lsq_linear
 
 from . import models
 from .config import Config
 from .model import build_problem, solve
+from .state import EquilibriumError
 from .uniformity import ring_areas_inside, weighted_std_over_mean
 from .units import to_si
 
-__all__ = ["ZoneTuning", "tune_zones", "DEFAULT_BOUNDS", "KEEP"]
+__all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "KEEP", "LENGTH_UNITS"]
 
 PSI = 6894.757293168361
 #: Default bounds of the zone pressures, Pa (0.5-8 psi, issue 25).
@@ -37,6 +43,69 @@ DEFAULT_BOUNDS = (0.5 * PSI, 8.0 * PSI)
 KEEP = (None, "pressure", "rate")
 #: Relative step of the finite-difference zone response.
 RESPONSE_STEP = 0.02
+#: Units a column of an incoming-thickness CSV may name in its header (``radius_mm``), in m.
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9, "angstrom": 1e-10}
+
+
+def read_incoming(path) -> tuple[np.ndarray, np.ndarray]:
+    """An incoming thickness profile from a CSV file: (radius, thickness), both in m.
+
+    The file has a header row naming two columns with their units, ``radius_<unit>`` and
+    ``thickness_<unit>`` (any order; units from :data:`LENGTH_UNITS`, e.g. ``radius_mm,thickness_nm``),
+    then one row of numbers per radius. Radii must be non-negative and strictly increasing, the
+    thickness positive and finite. Raises ``ValueError`` naming the file, the row or column and
+    what is wrong; ``OSError`` is turned into a ``ValueError`` too.
+    """
+    path = Path(path)
+    try:
+        with path.open(newline="") as fh:
+            rows = [row for row in csv.reader(fh) if row and any(c.strip() for c in row)]
+    except OSError as exc:
+        raise ValueError(f"incoming: cannot read {path}: {exc}") from None
+    if not rows:
+        raise ValueError(f"incoming: {path} is empty; expected a header 'radius_mm,thickness_nm' and rows of numbers")
+    header = [c.strip().lower() for c in rows[0]]
+    columns = {}
+    for j, name in enumerate(header):
+        quantity, _, unit = name.partition("_")
+        if quantity not in ("radius", "thickness"):
+            raise ValueError(f"incoming: {path} header column {name!r} is not radius_<unit> or thickness_<unit> (e.g. 'radius_mm,thickness_nm')")
+        if unit not in LENGTH_UNITS:
+            raise ValueError(f"incoming: {path} column {name!r}: unit {unit!r} not known; use one of {', '.join(LENGTH_UNITS)}")
+        if quantity in columns:
+            raise ValueError(f"incoming: {path} names the {quantity} column twice")
+        columns[quantity] = (j, LENGTH_UNITS[unit])
+    if set(columns) != {"radius", "thickness"} or len(header) != 2:
+        raise ValueError(f"incoming: {path} header must name exactly two columns, radius_<unit> and thickness_<unit>; got {rows[0]}")
+    data = []
+    for n, row in enumerate(rows[1:], start=2):
+        if len(row) != 2:
+            raise ValueError(f"incoming: {path} row {n} has {len(row)} values; expected 2")
+        try:
+            data.append([float(c) for c in row])
+        except ValueError:
+            raise ValueError(f"incoming: {path} row {n} is not two numbers: {row}") from None
+    if len(data) < 2:
+        raise ValueError(f"incoming: {path} has {len(data)} data rows; a profile needs at least 2")
+    data = np.array(data)
+    (jr, fr), (jt, ft) = columns["radius"], columns["thickness"]
+    return _checked_incoming(data[:, jr] * fr, data[:, jt] * ft, str(path))
+
+
+def _checked_incoming(radius, thickness, source: str = "incoming") -> tuple[np.ndarray, np.ndarray]:
+    """(radius, thickness) as float arrays, m, after checking them (ValueError naming ``source``)."""
+    r = np.asarray(radius, dtype=float)
+    t = np.asarray(thickness, dtype=float)
+    if r.ndim != 1 or r.shape != t.shape or r.size < 2:
+        raise ValueError(f"incoming ({source}): radius and thickness must be 1-D arrays of the same length >= 2; got shapes {r.shape} and {t.shape}")
+    if not (np.all(np.isfinite(r)) and np.all(np.isfinite(t))):
+        raise ValueError(f"incoming ({source}): radius and thickness must be finite numbers")
+    if r[0] < 0 or np.any(np.diff(r) <= 0):
+        raise ValueError(f"incoming ({source}): radii must be >= 0 and strictly increasing")
+    if np.any(t <= 0):
+        i = int(np.argmin(t))
+        raise ValueError(f"incoming ({source}): thickness must be positive; got {t[i]:g} m at radius {r[i]:g} m")
+    return r, t
 
 
 @dataclass
@@ -46,6 +115,11 @@ class ZoneTuning:
     ``zone_pressures`` the tuned pressures; ``within_wafer_nonuniformity`` and ``profile``
     (radius, rate) of the tuned solve, ``before`` the same of the start; ``response`` the last
     zone response d RR_i / d P_k (rings x zones, m/s/Pa); ``solves`` the operating points solved.
+    With an incoming profile: ``polish_time`` (s), ``remaining_thickness`` (radius, thickness; m)
+    and ``remaining_nonuniformity`` (fraction) of the tuned pressures, and the same in ``before``;
+    ``within_wafer_nonuniformity`` stays that of the removal profile; ``history`` holds
+    (pressures, objective) of each accepted step, the objective being the remaining thickness's
+    non-uniformity then.
     """
 
     zone_radii: tuple
@@ -58,6 +132,9 @@ class ZoneTuning:
     solves: int
     ring_faces: np.ndarray  # radii of the grid's ring faces, m
     history: list = field(default_factory=list)
+    polish_time: float | None = None
+    remaining_thickness: dict | None = None
+    remaining_nonuniformity: float | None = None
 
     @property
     def response_inside(self) -> tuple:
@@ -76,7 +153,7 @@ class ZoneTuning:
 
     def to_dict(self) -> dict:
         """The JSON object of ``cmpsim tune-zones --json`` (SI units)."""
-        return {
+        out = {
             "zone_radii": list(self.zone_radii),
             "zone_pressures": list(self.zone_pressures),
             "within_wafer_nonuniformity": self.within_wafer_nonuniformity,
@@ -90,6 +167,14 @@ class ZoneTuning:
             "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1"},
             "solves": self.solves,
         }
+        if self.remaining_thickness is not None:
+            out["polish_time"] = self.polish_time
+            out["remaining_thickness"] = {k: list(map(float, v)) for k, v in self.remaining_thickness.items()}
+            out["remaining_nonuniformity"] = self.remaining_nonuniformity
+            out["before"]["remaining_thickness"] = {k: list(map(float, v)) for k, v in self.before["remaining_thickness"].items()}
+            out["before"]["remaining_nonuniformity"] = self.before["remaining_nonuniformity"]
+            out["units"].update(polish_time="s", thickness="m", remaining_nonuniformity="1")
+        return out
 
 
 class _Solver:
@@ -122,8 +207,50 @@ def _profile(result) -> dict:
     return {"radius": np.asarray(result.profiles["radius"]), "rate": np.asarray(result.profiles["removal_rate_profile"])}
 
 
-def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, max_steps: int = 6, rtol: float = 1e-3) -> ZoneTuning:
-    """Zone pressures of a membrane head that flatten its removal-rate profile.
+def _incoming_on_rings(incoming, result) -> np.ndarray:
+    """The incoming thickness (m) interpolated linearly onto the profile radii of ``result``.
+
+    The profile must cover the centre of every ring the non-uniformity weighs (inside the edge
+    exclusion); otherwise ValueError naming the range needed and the range given.
+    """
+    r_in, t_in = incoming
+    radius = _profile(result)["radius"]
+    used = radius[_weights(result) > 0]
+    if r_in[0] > used[0] or r_in[-1] < used[-1]:
+        raise ValueError(
+            f"incoming: the profile covers radii {1e3 * r_in[0]:g}-{1e3 * r_in[-1]:g} mm; it must cover "
+            f"{1e3 * used[0]:g}-{1e3 * used[-1]:g} mm (the centres of the rings inside the wafer radius minus the edge exclusion)"
+        )
+    return np.interp(radius, r_in, t_in)
+
+
+def _remaining(result, thickness, polish_time) -> np.ndarray:
+    """Remaining thickness t_in - RR polish_time on the profile radii, m."""
+    return thickness - _profile(result)["rate"] * polish_time
+
+
+def _check_not_through(remaining, result, polish_time, which: str) -> None:
+    """Refuse a polish that removes more than the incoming film anywhere inside the edge exclusion."""
+    inside = _weights(result) > 0
+    if np.any(remaining[inside] <= 0):
+        i = int(np.argmin(np.where(inside, remaining, np.inf)))
+        r = _profile(result)["radius"][i]
+        raise ValueError(
+            f"polish_time = {polish_time:g} s removes more than the incoming thickness {which}: remaining "
+            f"{remaining[i]:g} m at radius {1e3 * r:g} mm; shorten polish_time"
+        )
+
+
+def tune_zones(
+    config: Config,
+    bounds=DEFAULT_BOUNDS,
+    keep: str | None = None,
+    max_steps: int = 6,
+    rtol: float = 1e-3,
+    incoming=None,
+    polish_time=None,
+) -> ZoneTuning:
+    """Zone pressures of a membrane head that flatten its removal-rate profile, or the film left after polishing.
 
     Parameters
     ----------
@@ -138,6 +265,12 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
         Gauss-Newton steps at most (each costs one solve per zone and one of the step).
     rtol : float
         Stop when a step lowers the non-uniformity by less than this fraction of it.
+    incoming : path, or (radius, thickness) arrays in m, optional
+        An incoming film thickness profile (a CSV file read by :func:`read_incoming`). Then the
+        pressures flatten the remaining thickness t_in(r) - RR(r) polish_time (t_in interpolated
+        linearly onto the profile radii) instead of the rate; ``keep = "rate"`` keeps the mean rate.
+    polish_time : float (s) or text with units
+        The polish time; required with ``incoming``, refused without it.
 
     Returns
     -------
@@ -146,7 +279,10 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
     Raises
     ------
     ValueError
-        Not a membrane head, or bad bounds (naming them); the start outside the bounds.
+        Not a membrane head, or bad bounds (naming them); the start outside the bounds; a bad
+        incoming profile (naming the file, row or column), one that does not cover the rings inside
+        the edge exclusion, or a polish time that removes more than the incoming film anywhere
+        inside the edge exclusion at the start or the tuned pressures.
     cmpsim.EquilibriumError
         A solve at the start failed.
     """
@@ -157,6 +293,18 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
     lo, hi = (to_si(b, "Pa", "bounds", example="psi") for b in bounds)
     if not (0 < lo < hi):
         raise ValueError(f"bounds must be 0 < low < high (Pa); got ({lo:g}, {hi:g}) Pa")
+    if (incoming is None) != (polish_time is None):
+        raise ValueError("incoming and polish_time go together: give both (the incoming thickness profile and the polish time) or neither")
+    if incoming is not None:
+        if isinstance(incoming, (str, Path)):
+            incoming = read_incoming(incoming)
+        elif len(incoming) == 2:
+            incoming = _checked_incoming(*incoming)
+        else:
+            raise ValueError(f"incoming must be a CSV path or a (radius, thickness) pair of arrays in m; got {len(incoming)} items")
+        polish_time = to_si(polish_time, "s", "polish_time", example="min")
+        if not (np.isfinite(polish_time) and polish_time > 0):
+            raise ValueError(f"polish_time must be > 0 s; got {polish_time:g} s")
     radii = config.zone_outer_radii
     start = np.array(config.zone_pressure_values, dtype=float)
     if np.any(start < lo) or np.any(start > hi):
@@ -166,10 +314,21 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
     run.adopt(base)
     weights = _weights(base)
     areas = np.diff(np.concatenate([[0.0], radii]) ** 2)  # zone areas / pi
-    target_rate = float(np.sum(weights * _profile(base)["rate"]) / weights.sum())
+
+    if incoming is None:
+        scale = 1.0  # the flattened quantity q = RR, d q / d RR = 1
+        offset = np.zeros(weights.size)
+    else:  # q = t_in - RR T
+        scale, offset = -polish_time, _incoming_on_rings(incoming, base)
+        _check_not_through(_remaining(base, offset, polish_time), base, polish_time, "at the start's pressures")
+
+    def quantity(result) -> np.ndarray:
+        return offset + scale * _profile(result)["rate"]
+
+    target = float(np.sum(weights * quantity(base)) / weights.sum())  # the start's mean of q
 
     def nonuniformity(result) -> float:
-        return weighted_std_over_mean(_profile(result)["rate"], weights)
+        return weighted_std_over_mean(quantity(result), weights)
 
     current, pressures = base, start.copy()
     wiwnu = nonuniformity(base)
@@ -177,30 +336,35 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
     response = np.zeros((weights.size, start.size))
     for _ in range(max_steps):
         rate = _profile(current)["rate"]
+        q = quantity(current)
         for k in range(start.size):  # the zone response, warm-started from the current solve
             dp = RESPONSE_STEP * pressures[k]
             trial = pressures.copy()
             trial[k] += dp if trial[k] + dp <= hi else -dp
             step_k = trial[k] - pressures[k]
             response[:, k] = (_profile(run(trial))["rate"] - rate) / step_k
-        # least squares in (dP, m): sqrt(a_i) (rate_i + J dP - m) -> 0, relative to the mean rate
-        w = np.sqrt(weights / weights.sum()) / target_rate
-        A = np.hstack([w[:, None] * response, -w[:, None]])
-        b = -w * rate
+        # least squares in (dP, m): sqrt(a_i) (q_i + s J dP - m) -> 0, relative to the mean of q
+        w = np.sqrt(weights / weights.sum()) / abs(target)
+        A = np.hstack([w[:, None] * (scale * response), -w[:, None]])
+        b = -w * q
         lower = np.concatenate([lo - pressures, [-np.inf]])
         upper = np.concatenate([hi - pressures, [np.inf]])
         rows, rhs = [A], [b]
         if keep == "pressure":  # sum A_k dP_k = 0, weighted to dominate
             rows.append(1e3 * np.concatenate([areas / areas.sum(), [0.0]])[None, :] / PSI)
             rhs.append([0.0])
-        elif keep == "rate":  # the level m is the start's mean rate
-            lower[-1], upper[-1] = target_rate - 1e-12 * target_rate, target_rate + 1e-12 * target_rate
+        elif keep == "rate":  # the level m is the start's mean of q (of the rate, or t_in - rate T)
+            lower[-1], upper[-1] = target - 1e-12 * abs(target), target + 1e-12 * abs(target)
         sol = lsq_linear(np.vstack(rows), np.concatenate(rhs), bounds=(lower, upper))
         step = sol.x[:-1]
         accepted = False
         for _halving in range(4):
             trial = np.clip(pressures + step, lo, hi)
-            result = run(trial)
+            try:
+                result = run(trial)
+            except EquilibriumError:  # a step too far for the solver counts as one that does not flatten
+                step = 0.5 * step
+                continue
             value = nonuniformity(result)
             if value < wiwnu:
                 accepted = True
@@ -215,16 +379,26 @@ def tune_zones(config: Config, bounds=DEFAULT_BOUNDS, keep: str | None = None, m
         if gain < rtol:
             break
     final_cfg = config.replace(zone_pressures=tuple(float(p) for p in pressures))
+    before = {"zone_pressures": tuple(start), "within_wafer_nonuniformity": weighted_std_over_mean(_profile(base)["rate"], weights), "profile": _profile(base)}
+    extra = {}
+    if incoming is not None:
+        remaining = _remaining(current, offset, polish_time)
+        _check_not_through(remaining, current, polish_time, "at the tuned pressures")
+        radius = _profile(current)["radius"]
+        extra = dict(polish_time=polish_time, remaining_thickness={"radius": radius, "thickness": remaining}, remaining_nonuniformity=wiwnu)
+        before.update(remaining_thickness={"radius": radius, "thickness": _remaining(base, offset, polish_time)}, remaining_nonuniformity=history[0][1])
+        wiwnu = weighted_std_over_mean(_profile(current)["rate"], weights)
     return ZoneTuning(
         zone_radii=tuple(radii),
         zone_pressures=tuple(float(p) for p in pressures),
         within_wafer_nonuniformity=wiwnu,
         profile=_profile(current),
-        before={"zone_pressures": tuple(start), "within_wafer_nonuniformity": history[0][1], "profile": _profile(base)},
+        before=before,
         response=response,
         config=final_cfg,
         solves=run.solves,
         ring_faces=np.asarray(base.grid.ring_faces, dtype=float),
         history=history,
+        **extra,
     )
 
