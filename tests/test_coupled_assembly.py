@@ -11,7 +11,8 @@ import scipy.sparse as sp
 
 from cmpsim.abrasion import interference, pad_gap
 from cmpsim.grid import PolarGrid, face_operators
-from cmpsim.reynolds import FaceCoefficients, assemble_operator, coupled_newton_matrices, flux_divergence, own_face_fluxes
+from cmpsim.coupling import coupled_newton_matrices
+from cmpsim.reynolds import FaceCoefficients, assemble_operator, flux_divergence, own_face_fluxes
 
 
 def _random_coefficients(grid, rng):
