@@ -42,10 +42,10 @@ from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from .grid import PolarGrid
 from .padstack import plate_bending_stiffness
+from .sparse import factorize
 
 __all__ = ["bending_stiffness", "KirchhoffPlate", "PlateDeflection", "PlateOperator", "zone_load"]
 
@@ -144,7 +144,7 @@ class PlateOperator:
             self.offsets.append(offset)
             offset += block.shape[0]
         self.size = offset
-        self._lu = splu(sp.block_diag(blocks, format="csc"))
+        self._lu = factorize(sp.block_diag(blocks, format="csc"))  # cmpsim's one guarded sparse LU
         self._n_r = n_r
 
     # ------------------------------------------------------------------ assembly
