@@ -64,6 +64,9 @@ __all__ = [
     "CoupledLinearisation",
     "coupled_state",
     "coupled_jacobian",
+    "coupled_sensitivity",
+    "expect_film_change",
+    "film_response",
     "compliant_contact_only_start",
     "deformed_film",
     "local_deflection",
@@ -456,26 +459,72 @@ def coupled_state(problem, u):
     )
 
 
-def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
-    """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
-
-    For each component of u the Reynolds residual and the local balance are differentiated at
-    fixed (phi, w), and the coupled system is solved with the state's factorisation: three
-    back-substitutions. The face coefficients depend on u only through the film on each face,
-    so dR/du is the face-flux slopes of the linearisation times d(rigid film)/du on the faces
-    (a finite difference of the geometry alone: no coefficient evaluation, no assembly).
-    """
-    ops = _face_operators(problem.grid)
+def _state_linearisation(problem, st) -> CoupledLinearisation:
+    """The factorisation to differentiate the solved state ``st`` with: its own if it was built
+    close enough to it (see _JACOBIAN_MOVE, _JACOBIAN_DRIFT) on the same cavitated set, else a
+    fresh one at the state (then kept as the state's and the problem's)."""
     lin, ev = st.coupling
     moved = np.max(np.abs(st.u - lin.u) / problem.u_scale) if lin is not None else np.inf
     # a factorisation taken on another cavitated set linearises the other side of p_cav
     other_set = lin is not None and not _same_set(lin.cavitated, st.cavitated)
     if lin is None or moved > _JACOBIAN_MOVE or lin.drift > _JACOBIAN_DRIFT or other_set:
-        lin = _linearise(problem, ev, ops)  # the state converged on another position's factorisation
+        lin = _linearise(problem, ev, _face_operators(problem.grid))  # the state converged on another position's factorisation
         st.coupling = (lin, ev)
         _memory(problem).lin = lin
+    return lin
+
+
+def film_response(problem, st, dh, dhr, dha):
+    """The linear change of the pressure at a solved compliant state under a change of the film at fixed u.
+
+    ``dh``, ``dhr``, ``dha`` (m, flat) are the change of the film the carrier imposes at the cell
+    centres and on the radial and angular faces (a change of position u, or of the wafer's
+    bending); the slurry unknown and the pad deflection follow it through the coupled Newton
+    system at the state (implicit differentiation, one back-substitution):
+    returns (dP, dphi, dw), dP = P_phi dphi + P_h (dh + dw) the change of the total pressure (Pa, flat).
+    """
+    ops = _face_operators(problem.grid)
+    lin = _state_linearisation(problem, st)
     s_rad, s_ang = lin.face_slopes
+    dR = ops.div_radial @ (s_rad * dhr) + ops.div_angular @ (s_ang * dha)
+    dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)
+    dphi, dw = lin.solve(dR, dG)
+    problem.back_substitutions += 1
+    return lin.P_phi * dphi + lin.P_h * (dh + dw), dphi, dw
+
+
+def expect_film_change(problem, st, dh, dhr, dha) -> np.ndarray:
+    """:func:`film_response` at the state of the last Jacobian or sensitivity, whose tangent predictor
+    it then moves by the linear change of the slurry unknown and the pad deflection: the next coupled
+    solve starts where the film change (a new bending of the wafer) is expected to lead, plus the
+    tangent's own change with u. Returns the change of the total pressure (Pa, flat)."""
+    dP, dphi, dw = film_response(problem, st, dh, dhr, dha)
+    mem = _memory(problem)
+    if mem.tangent is not None and np.array_equal(mem.tangent[0], st.u):
+        ut, phi_t, w_t, dphi_du, dw_du = mem.tangent
+        mem.tangent = (ut, phi_t + dphi.reshape(phi_t.shape), w_t + dw.reshape(w_t.shape), dphi_du, dw_du)
+    return dP
+
+
+def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
+    """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
+
+    For each component of u the Reynolds residual and the local balance are differentiated at
+    fixed (phi, w), and the coupled system is solved with the state's factorisation: three
+    back-substitutions (:func:`film_response`). The face coefficients depend on u only through
+    the film on each face, so dR/du is the face-flux slopes of the linearisation times
+    d(rigid film)/du on the faces (a finite difference of the geometry alone: no coefficient
+    evaluation, no assembly).
+    """
+    return coupled_sensitivity(problem, st, rel_step)[0]
+
+
+def coupled_sensitivity(problem, st, rel_step: float = 1e-6):
+    """(J, dP/du) at a solved compliant state: the Jacobian d(residual)/du of :func:`coupled_jacobian`
+    and the change of the total pressure per unit change of each component of u (Pa per unit of u,
+    shape (n_r, n_theta, 3)). Keeps the tangent predictor of the next coupled solve."""
     J = np.empty((3, 3))
+    dP_du = np.empty((st.phi.size, 3))
     dphi_du = np.empty((st.phi.size, 3))
     dw_du = np.empty((st.phi.size, 3))
     points = ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya))
@@ -485,19 +534,14 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
         du[k] = rel_step * problem.u_scale[k]
         u = st.u + du
         dh, dhr, dha = (((_rigid_film(problem, u, x, y) - b) / du[k]).ravel() for (x, y), b in zip(points, base))
-        dR = ops.div_radial @ (s_rad * dhr) + ops.div_angular @ (s_ang * dha)
-        dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)
-        dphi, dw = lin.solve(dR, dG)
-        problem.back_substitutions += 1
-        dP = lin.P_phi * dphi + lin.P_h * (dh + dw)
-        J[:, k] = problem.carrier.residual_change(problem, dP.reshape(st.phi.shape))
-        dphi_du[:, k], dw_du[:, k] = dphi, dw
+        dP_du[:, k], dphi_du[:, k], dw_du[:, k] = film_response(problem, st, dh, dhr, dha)
+        J[:, k] = problem.carrier.residual_change(problem, dP_du[:, k].reshape(st.phi.shape))
     shape = st.phi.shape
     _memory(problem).tangent = (
         st.u.copy(), st.phi.copy(), st.deflection.copy(),
         dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
     )
-    return J
+    return J, dP_du.reshape(shape + (3,))
 
 
 def _same_set(a, b) -> bool:

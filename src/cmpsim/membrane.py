@@ -11,19 +11,26 @@ solver for each bending: force and moment balance are the plate's solvability co
 the solution the plate's relief load vanishes and the bending is a bending only.
 
 Solve (docs/model.md, "Carrier"). ``equilibrium(w)`` returns the equilibrium state (force and
-moment balance) with the wafer face bent by w. The bending is the root of the preconditioned
-fixed-point residual
+moment balance) with the wafer face bent by w; ``response(w, dw)`` the linear change of its face
+pressure under a change dw of the bending, the rigid-body position re-balanced (implicit
+differentiation of the equilibrium at w). The bending is the root of the preconditioned residual
 
     F(w) = (K + k) ^-1 (p(w) - p_b + k w) - w,
 
 with K the free plate and k the load stiffness -d(mean pressure)/d(h0) measured at the rigid
 equilibrium: where the pressure answers a change of film locally with about k, (K + k)^-1 is the
-inverse of the linearised problem and the iteration converges at once (the classical splitting
-of a plate on an elastic foundation); the remaining coupling is taken by Anderson mixing
-(:func:`scipy.optimize.anderson`). A thin wafer bends over ell = (D / k)^(1/4), a few mm, so the
-solve is continued in the bending stiffness: from a stiffness at which ell reaches the wafer
+inverse of the linearised problem (the classical splitting of a plate on an elastic foundation).
+The root is found by Newton's method on F whose linear systems
+
+    F'(w) dw = (K + k)^-1 (response(w, dw) + k dw) - dw = -F(w)
+
+are solved by GMRES (a Newton-Krylov method, Knoll & Keyes 2004): every Krylov vector costs one
+back-substitution of the state's factorisation and one plate solve, not an equilibrium, and each
+Newton step one equilibrium. A step that does not lower |F| is halved. If Newton fails from the
+start (a thin wafer whose bending is far from linear), the solve is continued in the bending
+stiffness: from a stiffness at which the bending length ell = (D / k)^(1/4) reaches the wafer
 radius (the wafer nearly rigid, the bending small) down to D by factors of 100, each stage
-starting from the last; a stage that fails is split once (factor 10).
+starting from the last; a stage that fails is split.
 """
 
 from __future__ import annotations
@@ -32,10 +39,8 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import anderson
-from scipy.optimize import NoConvergence
-
 from .grid import PolarGrid
+from .krylov import gmres
 from .plate import KirchhoffPlate, PlateOperator
 
 __all__ = ["BendingSolution", "BendingError", "solve_bending"]
@@ -44,6 +49,12 @@ __all__ = ["BendingSolution", "BendingError", "solve_bending"]
 #: before giving up.
 STAGE_FACTOR = 100.0
 MIN_STAGE_FACTOR = 10.0
+#: Relative residual of the Krylov solve of each Newton step (an inexact Newton step: the outer
+#: iteration then gains about this factor per step on top of its quadratic rate).
+KRYLOV_RTOL = 1e-4
+KRYLOV_MAX_ITER = 200
+#: Halvings of a Newton step that does not lower the residual, before the stage is given up.
+MAX_HALVINGS = 4
 
 
 class BendingError(RuntimeError):
@@ -53,12 +64,14 @@ class BendingError(RuntimeError):
 @dataclass
 class BendingSolution:
     """The bent wafer in equilibrium: ``deflection`` (m, cells), the final ``state`` of ``equilibrium``,
-    the number of equilibrium solves and the continuation's stiffness factors."""
+    the number of equilibrium solves, the continuation's stiffness factors (``[1.0]`` when none was
+    needed) and the Krylov iterations (linearised pressure responses) of the Newton steps."""
 
     deflection: np.ndarray
     state: object
     solves: int
     stages: list
+    krylov: int = 0
 
 
 def solve_bending(
@@ -68,20 +81,25 @@ def solve_bending(
     back_pressure,
     load_stiffness: float,
     tol: float,
+    response,
     start=None,
-    max_iter: int = 60,
+    max_iter: int = 30,
 ) -> BendingSolution:
     """Bending w (m) of ``plate`` on ``grid`` with the face pressure of ``equilibrium(w).p_total`` (Pa) and the back pressure ``back_pressure`` (Pa, cells).
 
-    ``load_stiffness`` k (Pa/m, > 0) preconditions the iteration; ``tol`` (m) bounds the
-    max-norm of the fixed-point residual F(w) (the change of the bending an iteration would
-    still make); ``start`` is a bending to start from (warm start). Raises :class:`BendingError`.
+    ``response(w, dw)`` is the linear change (Pa, cells) of the face pressure of the
+    equilibrium at the bending w (the last one ``equilibrium`` solved) under a change ``dw`` (m)
+    of the bending. ``load_stiffness`` k (Pa/m, > 0) preconditions the Newton-Krylov iteration;
+    ``tol`` (m) bounds the max-norm of the residual F(w) (the change of the bending a fixed-point
+    iteration would still make); ``start`` is a bending to start from (warm start);
+    ``max_iter`` bounds the Newton steps of each stage. Raises :class:`BendingError`.
     """
     if not (np.isfinite(load_stiffness) and load_stiffness > 0):
         raise BendingError(f"the load stiffness must be finite and > 0 Pa/m to precondition the bending; got {load_stiffness!r}")
     shape = (grid.n_r, grid.n_theta)
     pb = np.asarray(back_pressure, dtype=float).reshape(shape)
-    count = {"solves": 0, "last": None}
+    k = load_stiffness
+    count = {"solves": 0, "last": None, "krylov": 0}
 
     def evaluate(w):
         last = count["last"]
@@ -92,33 +110,55 @@ def solve_bending(
         count["last"] = (np.array(w, copy=True), st)
         return st
 
-    def stage(w0, scale):
-        """The bending at ``scale`` x the plate's stiffness, from ``w0`` (raises what Anderson or the equilibrium raise)."""
+    def stage(w, scale):
+        """The bending at ``scale`` x the plate's stiffness, from ``w`` (raises BendingError, or what the equilibrium raises)."""
         stiff = KirchhoffPlate(plate.thickness, plate.modulus * scale, plate.poisson)
-        op = PlateOperator(stiff, grid, load_stiffness)
+        op = PlateOperator(stiff, grid, k)
 
-        def residual(x):
-            wx = x.reshape(shape)
-            st = evaluate(wx)
-            return (op.deflection(np.asarray(st.p_total).reshape(shape) - pb + load_stiffness * wx) - wx).ravel()
+        def residual(wx):
+            return op.deflection(np.asarray(evaluate(wx).p_total).reshape(shape) - pb + k * wx) - wx
 
-        if np.max(np.abs(residual(w0.ravel()))) <= tol:  # already there (a warm start at the solution)
-            return w0
-        with warnings.catch_warnings():  # Anderson's small least-squares problems may be ill-conditioned; harmless
-            warnings.simplefilter("ignore")
-            return anderson(residual, w0.ravel(), alpha=1.0, M=6, f_tol=tol, maxiter=max_iter).reshape(shape)
+        f = residual(w)
+        size = np.max(np.abs(f))
+        for _ in range(max_iter):
+            if size <= tol:
+                return w
+            evaluate(w)  # the state the response linearises (already the last one solved)
 
-    failures = (NoConvergence, BendingError, RuntimeError, ValueError, np.linalg.LinAlgError)
+            def matvec(x, w=w):
+                count["krylov"] += 1
+                dw = x.reshape(shape)
+                return (op.deflection(np.asarray(response(w, dw)).reshape(shape) + k * dw) - dw).ravel()
+
+            try:  # from the fixed-point step dw = F, the Newton step of a purely local pressure response
+                step = gmres(matvec, -f.ravel(), x0=f.ravel(), rtol=KRYLOV_RTOL, max_iter=KRYLOV_MAX_ITER).reshape(shape)
+            except ValueError as exc:
+                raise BendingError(f"the Newton step of the bending did not converge ({exc})") from exc
+            for _ in range(MAX_HALVINGS + 1):
+                trial = w + step
+                f_trial = residual(trial)
+                size_trial = np.max(np.abs(f_trial))
+                if size_trial < size:
+                    break
+                step = 0.5 * step
+            else:
+                raise BendingError(f"no Newton step of the bending lowers its residual ({size:.3g} m)")
+            w, f, size = trial, f_trial, size_trial
+        if size <= tol:
+            return w
+        raise BendingError(f"the bending did not converge in {max_iter} Newton steps (residual {size:.3g} m against {tol:.3g} m)")
+
+    failures = (BendingError, RuntimeError, ValueError, np.linalg.LinAlgError)
     w, stages = None, []
-    if start is not None:  # a warm start goes straight to the plate's stiffness
-        try:
-            w = stage(np.asarray(start, dtype=float).reshape(shape), 1.0)
-            stages.append(1.0)
-        except failures:
-            w = None
+    w0 = np.zeros(shape) if start is None else np.asarray(start, dtype=float).reshape(shape)
+    try:  # straight to the plate's stiffness (from the warm start, or flat)
+        w = stage(w0, 1.0)
+        stages.append(1.0)
+    except failures:
+        w = None
     if w is None:
         # continuation from the stiffness at which the bending length reaches the wafer radius
-        first = max(1.0, load_stiffness * grid.radius**4 / plate.bending_stiffness)
+        first = max(1.0, k * grid.radius**4 / plate.bending_stiffness)
         w, done, scale = np.zeros(shape), first * STAGE_FACTOR, first
         while True:
             try:
@@ -137,4 +177,4 @@ def solve_bending(
                 break
             done, scale = scale, max(1.0, scale / STAGE_FACTOR)
     st = evaluate(w)  # the equilibrium at the converged bending (force and moment balance to the solver's tolerance)
-    return BendingSolution(w, st, count["solves"], stages)
+    return BendingSolution(w, st, count["solves"], stages, count["krylov"])

@@ -143,6 +143,7 @@ class MembraneCarrier(RigidCarrier):
         self.initial_bending = None
         self._interpolation: dict = {}
         self.bending_solves = 0
+        self.krylov_iterations = 0
 
     @classmethod
     def from_config(cls, config) -> "MembraneCarrier":
@@ -151,16 +152,21 @@ class MembraneCarrier(RigidCarrier):
         plate = KirchhoffPlate(config.wafer_thickness, config.wafer_modulus, config.wafer_poisson)
         return cls(config.zone_outer_radii, config.zone_pressure_values, plate, ring=ring_of(config))
 
-    def _bend(self, x, y) -> np.ndarray:
-        grid, w = self.bending
+    def _bend_matrix(self, grid, x, y):
+        """The (cached) matrix that interpolates a cell field of ``grid`` to the points (x, y)."""
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
-        key = (x.shape, hash(x.tobytes()), hash(y.tobytes()))
+        key = (grid, x.shape, hash(x.tobytes()), hash(y.tobytes()))
         m = self._interpolation.get(key)
         if m is None:
             if len(self._interpolation) > 16:
                 self._interpolation.clear()
             m = self._interpolation[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
-        return (m @ w.ravel()).reshape(x.shape)
+        return m
+
+    def _bend(self, x, y) -> np.ndarray:
+        grid, w = self.bending
+        shape = np.broadcast_shapes(np.shape(x), np.shape(y))
+        return (self._bend_matrix(grid, x, y) @ w.ravel()).reshape(shape)
 
     def film(self, problem, u, x, y) -> np.ndarray:
         """The rigid carrier's film plus the wafer's bending at points (x, y), m."""
@@ -181,8 +187,10 @@ class MembraneCarrier(RigidCarrier):
 
     def equilibrium(self, problem, solve, start=None, **options):
         """Rigid-body equilibrium of the flat-backed wafer (or of :attr:`initial_bending`, a warm start),
-        then the bending found around it (:func:`cmpsim.membrane.solve_bending`): each trial bending is
-        one warm-started ``solve``.
+        then the bending found around it (:func:`cmpsim.membrane.solve_bending`): each Newton step of
+        the bending is one ``solve``, warm-started at the rigid-body position the linearised balance
+        predicts, and its Krylov vectors are linearised pressure responses of the pad model
+        (``film_response``, ``sensitivity``: one back-substitution each).
 
         The load stiffness that preconditions the bending is -d(load)/d(h0) / area at the
         rigid-body equilibrium (one extra pressure solve). Raises EquilibriumError if the
@@ -193,31 +201,67 @@ class MembraneCarrier(RigidCarrier):
         self.bending = None if warm is None else (grid, np.array(warm, dtype=float).reshape(grid.n_r, grid.n_theta))
         self._interpolation.clear()
         sol = solve(problem, start=start, **options)
-        st = sol.state
-        step = 1e-3 * problem.sigma
-        shifted = problem.state(st.u + np.array([step, 0.0, 0.0]))
-        stiffness = -(grid.integrate(shifted.p_total) - grid.integrate(st.p_total)) / (step * grid.integrate(np.ones_like(st.h)))
-        last = {"sol": sol, "iterations": sol.iterations}
+        pad = problem.pad_model
+        # the last equilibrium solved, the bending it was solved at, and its linearisation (J, dP/du) once asked for
+        last = {"sol": sol, "iterations": sol.iterations, "w": self.bending_field(problem), "lin": pad.sensitivity(problem, sol.state)}
+        # the load stiffness: -d(mean pressure)/d(h0) at the rigid-body equilibrium
+        stiffness = -grid.integrate(last["lin"][1][..., 0]) / grid.integrate(np.ones_like(sol.state.h))
+        shape = (grid.n_r, grid.n_theta)
+
+        def balanced_response(dw, expect=False):
+            """(dP, du): the linear change of the face pressure (Pa, cells) and of u under a bending change dw at
+            the last state (with ``expect``, the next coupled solve starts from the film it predicts)."""
+            state = last["sol"].state
+            if last["lin"] is None:
+                last["lin"] = pad.sensitivity(problem, state)
+            J, dP_du = last["lin"]
+            flat = dw.ravel()
+            films = (flat, self._bend_matrix(grid, problem.xr, problem.yr) @ flat, self._bend_matrix(grid, problem.xa, problem.ya) @ flat)
+            dP = (pad.expect_film_change if expect else pad.film_response)(problem, state, *films).reshape(shape)
+            du = -np.linalg.solve(J, self.residual_change(problem, dP))  # the rigid body re-balanced
+            return dP + dP_du @ du, du
 
         def equilibrium(w):
-            self.bending = (grid, np.array(w, dtype=float, copy=True))
-            last["sol"] = solve(problem, start=last["sol"].state.u, **options)
+            w = np.array(w, dtype=float, copy=True)
+            if np.array_equal(w, last["w"]):  # the bending of the last equilibrium (the start): solved already
+                return last["sol"].state
+            guess = last["sol"].state.u
+            if last["lin"] is not None:  # the position the linearised balance predicts for this bending
+                guess = guess + balanced_response(w - last["w"], expect=True)[1]
+            self.bending = (grid, w)
+            last["sol"] = solve(problem, start=guess, **options)
             last["iterations"] += last["sol"].iterations
+            last["w"], last["lin"] = w, None
             return last["sol"].state
+
+        def response(w, dw):
+            return balanced_response(np.asarray(dw, dtype=float).reshape(shape))[0]
 
         tol = 1e3 * options.get("tol", 1e-9) * problem.sigma
         target = self.back_pressure(grid)
         mean = grid.integrate(target) / grid.integrate(np.ones_like(target))
-        # a cold start bends the wafer under uniform zones first, then ramps the zones to theirs
-        ramp = (1.0,) if warm is not None or np.allclose(target, mean, rtol=1e-12, atol=0.0) else self.ZONE_RAMP
-        w, solves = (None if warm is None else self.bending[1]), 0
-        try:
+        uniform = np.allclose(target, mean, rtol=1e-12, atol=0.0)
+        w, solves, krylov = (None if warm is None else self.bending[1]), 0, 0
+
+        def bend(ramp, w):
+            nonlocal solves, krylov
             for share in ramp:
-                bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol=tol, start=w)
-                w, solves = bent.deflection, solves + bent.solves
+                bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol, response, start=w)
+                w, solves, krylov = bent.deflection, solves + bent.solves, krylov + bent.krylov
+            return w
+
+        try:
+            try:  # straight to the zones' pressures
+                w = bend((1.0,), w)
+            except BendingError:
+                if warm is not None or uniform:
+                    raise
+                # a cold start of strongly non-uniform zones: bend the wafer under uniform zones first, then ramp
+                w = bend(self.ZONE_RAMP, None)
         except BendingError as exc:
             raise EquilibriumError(f"membrane carrier: {exc}") from exc
         self.bending = (grid, w)
         self.bending_solves = solves
+        self.krylov_iterations = krylov
         last["sol"].iterations = last["iterations"]  # Newton steps of every rigid-body solve of the bending
         return last["sol"]

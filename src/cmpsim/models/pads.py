@@ -294,6 +294,21 @@ class WinklerPad(RigidPad):
     def jacobian(self, problem, st: PressureState, rel_step: float = 1e-6) -> np.ndarray:
         return compliance.coupled_jacobian(problem, st, rel_step)
 
+    def sensitivity(self, problem, st: PressureState, rel_step: float = 1e-6):
+        """(d(residual)/du, d(total pressure)/du) at a solved state (:func:`cmpsim.compliance.coupled_sensitivity`)."""
+        return compliance.coupled_sensitivity(problem, st, rel_step)
+
+    def film_response(self, problem, st: PressureState, dh, dhr, dha) -> np.ndarray:
+        """The linear change of the total pressure (Pa, flat) at a solved state under a change of the carrier's
+        film at fixed u: ``dh``, ``dhr``, ``dha`` (m, flat) at the cell centres, radial and angular faces
+        (:func:`cmpsim.compliance.film_response`)."""
+        return compliance.film_response(problem, st, dh, dhr, dha)[0]
+
+    def expect_film_change(self, problem, st: PressureState, dh, dhr, dha) -> np.ndarray:
+        """:meth:`film_response`, and the next coupled solve starts from the film and deflection it predicts
+        (:func:`cmpsim.compliance.expect_film_change`)."""
+        return compliance.expect_film_change(problem, st, dh, dhr, dha)
+
     def contact_only_start(self, problem) -> np.ndarray:
         return compliance.compliant_contact_only_start(problem)
 
