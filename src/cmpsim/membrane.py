@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from .grid import PolarGrid
@@ -55,6 +56,20 @@ KRYLOV_RTOL = 1e-4
 KRYLOV_MAX_ITER = 200
 #: Halvings of a Newton step that does not lower the residual, before the stage is given up.
 MAX_HALVINGS = 4
+
+
+def plate_operator(plate: KirchhoffPlate, grid: PolarGrid, load_stiffness: float) -> PlateOperator:
+    """The preconditioner (K + k) of ``plate`` on ``grid``, k the load stiffness (Pa/m) rounded to 1/16 of an
+    octave: the operator is built once (one LU of its Fourier modes) and kept for the warm-started solves of
+    a study, whose load stiffness barely moves (a preconditioner; the bending it converges to does not
+    depend on k)."""
+    octave = round(16.0 * np.log2(load_stiffness)) / 16.0
+    return _plate_operator(plate, grid, float(2.0**octave))
+
+
+@lru_cache(maxsize=16)
+def _plate_operator(plate: KirchhoffPlate, grid: PolarGrid, k: float) -> PlateOperator:
+    return PlateOperator(plate, grid, k)
 
 
 class BendingError(RuntimeError):
@@ -113,10 +128,11 @@ def solve_bending(
     def stage(w, scale):
         """The bending at ``scale`` x the plate's stiffness, from ``w`` (raises BendingError, or what the equilibrium raises)."""
         stiff = KirchhoffPlate(plate.thickness, plate.modulus * scale, plate.poisson)
-        op = PlateOperator(stiff, grid, k)
+        op = plate_operator(stiff, grid, k)
+        k_op = op.k  # the preconditioner's stiffness (k to 1/16 of an octave)
 
         def residual(wx):
-            return op.deflection(np.asarray(evaluate(wx).p_total).reshape(shape) - pb + k * wx) - wx
+            return op.deflection(np.asarray(evaluate(wx).p_total).reshape(shape) - pb + k_op * wx) - wx
 
         f = residual(w)
         size = np.max(np.abs(f))
@@ -128,7 +144,7 @@ def solve_bending(
             def matvec(x, w=w):
                 count["krylov"] += 1
                 dw = x.reshape(shape)
-                return (op.deflection(np.asarray(response(w, dw)).reshape(shape) + k * dw) - dw).ravel()
+                return (op.deflection(np.asarray(response(w, dw)).reshape(shape) + k_op * dw) - dw).ravel()
 
             try:  # from the fixed-point step dw = F, the Newton step of a purely local pressure response
                 step = gmres(matvec, -f.ravel(), x0=f.ravel(), rtol=KRYLOV_RTOL, max_iter=KRYLOV_MAX_ITER).reshape(shape)

@@ -203,7 +203,8 @@ class MembraneCarrier(RigidCarrier):
         sol = solve(problem, start=start, **options)
         pad = problem.pad_model
         # the last equilibrium solved, the bending it was solved at, and its linearisation (J, dP/du) once asked for
-        last = {"sol": sol, "iterations": sol.iterations, "w": self.bending_field(problem), "lin": pad.sensitivity(problem, sol.state)}
+        flat = np.zeros((grid.n_r, grid.n_theta)) if self.bending is None else self.bending[1]
+        last = {"sol": sol, "iterations": sol.iterations, "w": flat, "lin": pad.sensitivity(problem, sol.state)}
         # the load stiffness: -d(mean pressure)/d(h0) at the rigid-body equilibrium
         stiffness = -grid.integrate(last["lin"][1][..., 0]) / grid.integrate(np.ones_like(sol.state.h))
         shape = (grid.n_r, grid.n_theta)
