@@ -500,9 +500,9 @@ def expect_film_change(problem, st, dh, dhr, dha) -> np.ndarray:
     tangent's own change with u. Returns the change of the total pressure (Pa, flat)."""
     dP, dphi, dw = film_response(problem, st, dh, dhr, dha)
     mem = _memory(problem)
-    if mem.tangent is not None and np.array_equal(mem.tangent[0], st.u):
-        ut, phi_t, w_t, dphi_du, dw_du = mem.tangent
-        mem.tangent = (ut, phi_t + dphi.reshape(phi_t.shape), w_t + dw.reshape(w_t.shape), dphi_du, dw_du)
+    if mem.tangent is not None and np.array_equal(mem.tangent[0], st.u):  # the tangent at st: its base is st's (phi, w)
+        ut, _, _, dphi_du, dw_du = mem.tangent
+        mem.tangent = (ut, st.phi + dphi.reshape(st.phi.shape), st.deflection + dw.reshape(st.phi.shape), dphi_du, dw_du)
     return dP
 
 

@@ -125,6 +125,8 @@ def solve_bending(
         count["last"] = (np.array(w, copy=True), st)
         return st
 
+    failures = (BendingError, RuntimeError, ValueError, np.linalg.LinAlgError)
+
     def stage(w, scale):
         """The bending at ``scale`` x the plate's stiffness, from ``w`` (raises BendingError, or what the equilibrium raises)."""
         stiff = KirchhoffPlate(plate.thickness, plate.modulus * scale, plate.poisson)
@@ -152,7 +154,10 @@ def solve_bending(
                 raise BendingError(f"the Newton step of the bending did not converge ({exc})") from exc
             for _ in range(MAX_HALVINGS + 1):
                 trial = w + step
-                f_trial = residual(trial)
+                try:
+                    f_trial = residual(trial)
+                except failures:  # no equilibrium at the trial bending: a step too far, as one that does not lower |F|
+                    f_trial = np.full(shape, np.inf)
                 size_trial = np.max(np.abs(f_trial))
                 if size_trial < size:
                     break
@@ -164,7 +169,6 @@ def solve_bending(
             return w
         raise BendingError(f"the bending did not converge in {max_iter} Newton steps (residual {size:.3g} m against {tol:.3g} m)")
 
-    failures = (BendingError, RuntimeError, ValueError, np.linalg.LinAlgError)
     w, stages = None, []
     w0 = np.zeros(shape) if start is None else np.asarray(start, dtype=float).reshape(shape)
     try:  # straight to the plate's stiffness (from the warm start, or flat)
