@@ -1,0 +1,160 @@
+"""The membrane carrier's solve against the Anderson fixed point it replaced (commit d19e2dd), in one run.
+
+Run: python benchmarks/bench_membrane.py [--repeat 3] [--rounds 2] [--layered] [--json FILE]
+(about 3 min on a shared 2-core VM; ``--layered`` adds a 300 mm head on the layered pad, a few
+minutes more for the baseline).
+
+The baseline's ``src/cmpsim`` is taken from this repository's history (``git archive d19e2dd``;
+``--baseline REF`` for another) into a temporary folder that a child process of the same
+interpreter puts first on its ``PYTHONPATH``: the same numpy, scipy and SuperLU, only cmpsim's
+code differs. The two versions take turns for ``--rounds`` rounds and each case keeps its best
+CPU time (``time.process_time``, best of ``--repeat`` in a warm process; a tuning once a round),
+so that other work on a shared machine hits both alike. The ratios baseline / now are what to
+compare across machines, never the absolute times.
+
+Cases (the default model with ``carrier = "membrane"`` on the default grid and the Winkler pad;
+300 mm: ``wafer_diameter = 300 mm``, ``centre_distance = 0.2 m``):
+
+* ``3in one zone``: the default operating point, cold;
+* ``300mm one zone``: the issue's cost criterion (one 300 mm membrane equilibrium, <= 1 s);
+* ``300mm five zones``: zones 50, 100, 130, 145, 150 mm at 3, 3, 3.5, 4, 2 psi, cold;
+* ``300mm tune-zones``: ``cmpsim.tune_zones`` on the same five zones from uniform pressure
+  (the criterion: <= 1 min), with its solves and the tuned non-uniformity;
+* ``300mm layered 12x32`` (``--layered``): a 775 um wafer on the layered pad, 12x32 grid.
+
+For each case it prints the CPU times, the ratio, the equilibrium solves of the bending and
+the LU factorisations, and the largest relative difference of the scalars between the versions
+(both converge the bending to the same tolerance, 1e-6 sigma on the fixed-point residual; the
+differences are that tolerance seen through each output).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+BASELINE = "d19e2dd"
+REPO = Path(__file__).resolve().parents[1]
+SCALARS = ("film_thickness_center", "attack_angle", "removal_rate_mean", "within_wafer_nonuniformity", "fluid_load_fraction")
+BIG = {"wafer_diameter": 0.3, "centre_distance": 0.2, "carrier": "membrane"}
+FIVE = {**BIG, "zone_radii": "50,100,130,145,150 mm"}
+CASES = {
+    "3in one zone": ("solve", {"carrier": "membrane"}),
+    "300mm one zone": ("solve", BIG),
+    "300mm five zones": ("solve", {**FIVE, "zone_pressures": "3,3,3.5,4,2 psi"}),
+    "300mm tune-zones": ("tune", FIVE),
+}
+LAYERED = {"300mm layered 12x32": ("solve", {**BIG, "pad_compliance": "layer", "grid": "12x32", "wafer_thickness": "775 um"})}
+
+#: What each version's child process runs; prints one line "RESULT {json}".
+CHILD = r"""
+import json, sys, time
+import cmpsim
+from cmpsim.config import Config
+
+repeat, cases, keep = int(sys.argv[1]), json.loads(sys.argv[2]), json.loads(sys.argv[3])
+cmpsim.solve(Config.default().replace(grid="coarse"), relative=False)  # imports, contact tables
+rows = {}
+for name, (kind, changes) in cases.items():
+    cfg = Config.default().replace(**changes)
+    best = None
+    for _ in range(1 if kind == "tune" else repeat):
+        start = time.process_time()
+        out = cmpsim.tune_zones(cfg) if kind == "tune" else cmpsim.solve(cfg, relative=False)
+        spent = time.process_time() - start
+        best = spent if best is None else min(best, spent)
+    if kind == "tune":
+        row = {"solves": out.solves, "scalars": {"within_wafer_nonuniformity": out.within_wafer_nonuniformity}}
+    else:
+        carrier = out.problem.carrier
+        row = {"solves": carrier.bending_solves, "lu": int(out.scalars["factorizations"]),
+               "scalars": {k: out.scalars[k] for k in keep}}
+    row["cpu_s"] = best
+    rows[name] = row
+print("RESULT " + json.dumps(rows))
+"""
+
+
+def extract(ref: str, into: Path) -> Path:
+    """The ``src`` folder of commit ``ref`` of this repository, unpacked under ``into``."""
+    tar = subprocess.run(["git", "-C", str(REPO), "archive", ref, "src"], check=True, capture_output=True).stdout
+    subprocess.run(["tar", "-x", "-C", str(into)], input=tar, check=True)
+    return into / "src"
+
+
+def child(src: Path, repeat: int, cases: dict) -> dict:
+    """Run the cases in a fresh interpreter with ``src`` first on its path."""
+    env = dict(os.environ, PYTHONPATH=str(src))
+    proc = subprocess.run(
+        [sys.executable, "-c", CHILD, str(repeat), json.dumps(cases), json.dumps(SCALARS)],
+        env=env, capture_output=True, text=True, check=False,
+    )
+    line = [x for x in proc.stdout.splitlines() if x.startswith("RESULT ")]
+    if proc.returncode or not line:
+        raise SystemExit(f"the child with {src} failed:\n{proc.stderr[-3000:]}")
+    return json.loads(line[-1][len("RESULT "):])
+
+
+def merge(kept: dict | None, new: dict) -> dict:
+    """Keep each case's smaller CPU time over the rounds."""
+    if kept is None:
+        return new
+    for name, row in new.items():
+        if row["cpu_s"] < kept[name]["cpu_s"]:
+            kept[name] = row
+    return kept
+
+
+def largest_difference(a: dict, b: dict) -> tuple[float, str]:
+    """The largest relative difference of the scalars of two rows, and which scalar."""
+    worst, which = 0.0, ""
+    for key, x in a["scalars"].items():
+        y = b["scalars"][key]
+        d = abs(x - y) / max(abs(x), abs(y), 1e-300)
+        if d > worst:
+            worst, which = d, key
+    return worst, which
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--repeat", type=int, default=3)
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--baseline", default=BASELINE, help="git ref of the baseline (default: the Anderson solver, %(default)s)")
+    ap.add_argument("--layered", action="store_true", help="add the 300 mm head on the layered pad")
+    ap.add_argument("--json", help="write the measurements to this file")
+    args = ap.parse_args()
+    cases = {**CASES, **(LAYERED if args.layered else {})}
+    with tempfile.TemporaryDirectory() as tmp:
+        old_src = extract(args.baseline, Path(tmp))
+        old = new = None
+        for _ in range(args.rounds):
+            old = merge(old, child(old_src, args.repeat, cases))
+            new = merge(new, child(REPO / "src", args.repeat, cases))
+    print(f"membrane carrier, CPU time, best of {args.repeat} x {args.rounds} rounds (tuning: best of {args.rounds})")
+    print(f"{'case':22s} {args.baseline:>9s} {'now':>9s} {'ratio':>7s}  {'solves':>9s}  {'LU':>9s}  largest scalar difference")
+    for name in cases:
+        a, b = old[name], new[name]
+        diff, which = largest_difference(a, b)
+        lu = f"{a['lu']:>4d}>{b['lu']:<4d}" if "lu" in a else " " * 9
+        print(
+            f"{name:22s} {a['cpu_s']:8.3f}s {b['cpu_s']:8.3f}s {a['cpu_s'] / b['cpu_s']:6.2f}x  "
+            f"{a['solves']:>4d}>{b['solves']:<4d}  {lu}  {diff:.1e} ({which})"
+        )
+    if "300mm tune-zones" in new:
+        t = new["300mm tune-zones"]
+        print(f"tune-zones 300 mm, five zones: {t['cpu_s']:.2f} s CPU, {t['solves']} solves, non-uniformity "
+              f"{t['scalars']['within_wafer_nonuniformity']:.3e} (criterion: <= 60 s)")
+    one = new["300mm one zone"]["cpu_s"]
+    print(f"one 300 mm membrane equilibrium: {one:.3f} s CPU (criterion: <= 1 s)")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"baseline": args.baseline, "old": old, "new": new}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
