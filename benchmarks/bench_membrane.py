@@ -38,6 +38,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from bench_versus_0_1 import max_rel_diff  # the largest relative difference of two dicts of scalars
+
 BASELINE = "d19e2dd"
 REPO = Path(__file__).resolve().parents[1]
 SCALARS = ("film_thickness_center", "attack_angle", "removal_rate_mean", "within_wafer_nonuniformity", "fluid_load_fraction")
@@ -110,17 +112,6 @@ def merge(kept: dict | None, new: dict) -> dict:
     return kept
 
 
-def largest_difference(a: dict, b: dict) -> tuple[float, str]:
-    """The largest relative difference of the scalars of two rows, and which scalar."""
-    worst, which = 0.0, ""
-    for key, x in a["scalars"].items():
-        y = b["scalars"][key]
-        d = abs(x - y) / max(abs(x), abs(y), 1e-300)
-        if d > worst:
-            worst, which = d, key
-    return worst, which
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--repeat", type=int, default=3)
@@ -140,7 +131,7 @@ def main() -> None:
     print(f"{'case':22s} {args.baseline:>9s} {'now':>9s} {'ratio':>7s}  {'solves':>9s}  {'LU':>9s}  largest scalar difference")
     for name in cases:
         a, b = old[name], new[name]
-        diff, which = largest_difference(a, b)
+        diff, which = max_rel_diff(a["scalars"], b["scalars"])
         lu = f"{a['lu']:>4d}>{b['lu']:<4d}" if "lu" in a else " " * 9
         print(
             f"{name:22s} {a['cpu_s']:8.3f}s {b['cpu_s']:8.3f}s {a['cpu_s'] / b['cpu_s']:6.2f}x  "

@@ -128,7 +128,8 @@ class MembraneCarrier(RigidCarrier):
 
     name = "membrane"
     has_zones = True
-    #: Shares of the zones' departure from their mean applied in turn on a cold start (continuation).
+    #: Shares of the zones' departure from their mean applied in turn on a cold start that Newton
+    #: could not take in one go (continuation).
     ZONE_RAMP = (0.0, 0.25, 0.5, 0.75, 1.0)
 
     def __init__(self, radii, pressures, plate: KirchhoffPlate, ring=None):
@@ -142,6 +143,8 @@ class MembraneCarrier(RigidCarrier):
         #: A bending (m, cells of the problem's grid) to start the next equilibrium from (a warm start), or None.
         self.initial_bending = None
         self._interpolation: dict = {}
+        #: Equilibria solved at a new bending after the first (rigid-body) one, and the Krylov vectors
+        #: (linearised pressure responses) of the bending's Newton steps, in the last equilibrium.
         self.bending_solves = 0
         self.krylov_iterations = 0
 
@@ -193,8 +196,9 @@ class MembraneCarrier(RigidCarrier):
         (``film_response``, ``sensitivity``: one back-substitution each).
 
         The load stiffness that preconditions the bending is -d(load)/d(h0) / area at the
-        rigid-body equilibrium (one extra pressure solve). Raises EquilibriumError if the
-        bending does not converge.
+        rigid-body equilibrium (from its sensitivity: three back-substitutions). A cold start whose
+        zones Newton cannot reach from the flat wafer ramps them from their mean
+        (:attr:`ZONE_RAMP`). Raises EquilibriumError if the bending does not converge.
         """
         grid = problem.grid
         warm = self.initial_bending
@@ -204,7 +208,7 @@ class MembraneCarrier(RigidCarrier):
         pad = problem.pad_model
         # the last equilibrium solved, the bending it was solved at, and its linearisation (J, dP/du) once asked for
         flat = np.zeros((grid.n_r, grid.n_theta)) if self.bending is None else self.bending[1]
-        last = {"sol": sol, "iterations": sol.iterations, "w": flat, "lin": pad.sensitivity(problem, sol.state)}
+        last = {"sol": sol, "iterations": sol.iterations, "w": flat, "lin": pad.sensitivity(problem, sol.state), "solves": 0}
         # the load stiffness: -d(mean pressure)/d(h0) at the rigid-body equilibrium
         stiffness = -grid.integrate(last["lin"][1][..., 0]) / grid.integrate(np.ones_like(sol.state.h))
         shape = (grid.n_r, grid.n_theta)
@@ -230,6 +234,7 @@ class MembraneCarrier(RigidCarrier):
             if last["lin"] is not None:  # the position the linearised balance predicts for this bending
                 guess = guess + balanced_response(w - last["w"], expect=True)[1]
             self.bending = (grid, w)
+            last["solves"] += 1
             last["sol"] = solve(problem, start=guess, **options)
             last["iterations"] += last["sol"].iterations
             last["w"], last["lin"] = w, None
@@ -242,13 +247,13 @@ class MembraneCarrier(RigidCarrier):
         target = self.back_pressure(grid)
         mean = grid.integrate(target) / grid.integrate(np.ones_like(target))
         uniform = np.allclose(target, mean, rtol=1e-12, atol=0.0)
-        w, solves, krylov = (None if warm is None else self.bending[1]), 0, 0
+        w, krylov = (None if warm is None else self.bending[1]), 0
 
         def bend(ramp, w):
-            nonlocal solves, krylov
+            nonlocal krylov
             for share in ramp:
                 bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol, response, start=w)
-                w, solves, krylov = bent.deflection, solves + bent.solves, krylov + bent.krylov
+                w, krylov = bent.deflection, krylov + bent.krylov
             return w
 
         try:
@@ -262,7 +267,7 @@ class MembraneCarrier(RigidCarrier):
         except BendingError as exc:
             raise EquilibriumError(f"membrane carrier: {exc}") from exc
         self.bending = (grid, w)
-        self.bending_solves = solves
+        self.bending_solves = last["solves"]  # equilibria solved at a new bending, after the first
         self.krylov_iterations = krylov
         last["sol"].iterations = last["iterations"]  # Newton steps of every rigid-body solve of the bending
         return last["sol"]
