@@ -40,6 +40,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+
 from .grid import PolarGrid
 from .krylov import gmres
 from .plate import KirchhoffPlate, PlateOperator
@@ -151,7 +152,7 @@ def solve_bending(
             try:  # from the fixed-point step dw = F, the Newton step of a purely local pressure response
                 step = gmres(matvec, -f.ravel(), x0=f.ravel(), rtol=KRYLOV_RTOL, max_iter=KRYLOV_MAX_ITER).reshape(shape)
             except ValueError as exc:
-                raise BendingError(f"the Newton step of the bending did not converge ({exc})") from exc
+                raise BendingError(f"the Krylov solve of a Newton step of the bending did not converge in {KRYLOV_MAX_ITER} iterations") from exc
             for _ in range(MAX_HALVINGS + 1):
                 trial = w + step
                 try:
