@@ -22,6 +22,11 @@ from ..state import EquilibriumError
 __all__ = ["RigidCarrier", "MembraneCarrier", "ring_of"]
 
 
+#: Interpolation matrices from a grid's cells to points, by (grid, points): the faces and centres of
+#: a grid are the same for every solve of a study, so every head on that grid shares them.
+_INTERPOLATION: dict = {}
+
+
 def ring_of(config):
     """The retaining ring of a Config: (inner radius, outer radius, pressure) in m, m, Pa, or None without ring pressure."""
     if config.retaining_ring_pressure == 0.0:
@@ -142,7 +147,6 @@ class MembraneCarrier(RigidCarrier):
         self.bending = None  # (grid, cell field of w, m) once solved
         #: A bending (m, cells of the problem's grid) to start the next equilibrium from (a warm start), or None.
         self.initial_bending = None
-        self._interpolation: dict = {}
         #: Equilibria solved at a new bending after the first (rigid-body) one, and the Krylov vectors
         #: (linearised pressure responses) of the bending's Newton steps, in the last equilibrium.
         self.bending_solves = 0
@@ -159,11 +163,11 @@ class MembraneCarrier(RigidCarrier):
         """The (cached) matrix that interpolates a cell field of ``grid`` to the points (x, y)."""
         x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
         key = (grid, x.shape, hash(x.tobytes()), hash(y.tobytes()))
-        m = self._interpolation.get(key)
+        m = _INTERPOLATION.get(key)
         if m is None:
-            if len(self._interpolation) > 16:
-                self._interpolation.clear()
-            m = self._interpolation[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
+            if len(_INTERPOLATION) > 32:
+                _INTERPOLATION.clear()
+            m = _INTERPOLATION[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
         return m
 
     def _bend(self, x, y) -> np.ndarray:
@@ -203,7 +207,6 @@ class MembraneCarrier(RigidCarrier):
         grid = problem.grid
         warm = self.initial_bending
         self.bending = None if warm is None else (grid, np.array(warm, dtype=float).reshape(grid.n_r, grid.n_theta))
-        self._interpolation.clear()
         sol = solve(problem, start=start, **options)
         pad = problem.pad_model
         # the last equilibrium solved, the bending it was solved at, and its linearisation (J, dP/du) once asked for
