@@ -524,7 +524,11 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = _MAX_JOINT,
     sigma = problem.sigma
     u = np.asarray(u, dtype=float).copy()
     try:
-        phi, w = _start(problem, u, mem)
+        if mem.tangent is None and mem.last is not None and np.array_equal(mem.last[0], u):
+            # the contact-only start (or a state solved here): no local balance first, Newton balances w
+            phi, w = mem.last[1], mem.last[2]
+        else:
+            phi, w = _start(problem, u, mem)
         lin = cols = prev = size = None
         history = []
         for it in range(max_iter + 1):
@@ -642,10 +646,7 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         )
     # contact only, the local balance k w = p_c(h) with h = h_rigid + w inverts explicitly:
     # h_rigid = h - p_c(h) / k is increasing in h, so a table of it gives h from h_rigid
-    cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
-    h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
-    h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
-    hr_tab = h_tab - problem.contact(h_tab)[0] / problem.foundation.stiffness
+    h_max, h_tab, hr_tab = _contact_only_table(problem)
 
     def film(h0):
         hr = h0 + shape
@@ -660,9 +661,31 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         raise EquilibriumError("no film balances the contact load on the compliant pad")
     h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * sigma, rtol=1e-12)
     u = np.array([h0, 0.0, 0.0])
-    w = local_deflection(problem, h0 + shape, np.zeros_like(shape), film(h0) - (h0 + shape))
-    _memory(problem).last = (u, np.zeros_like(shape), w)
+    # the deflection of the table (the coupled solve's start balances it to round-off: :func:`_start`)
+    _memory(problem).last = (u, np.zeros_like(shape), film(h0) - (h0 + shape))
     return u
+
+
+_CONTACT_ONLY_TABLES: dict = {}
+
+
+def _contact_only_table(problem) -> tuple:
+    """(h_max, h, h_rigid) of the contact-only local balance: the film h (m) on 4001 points up to
+    h_max, where the contact ends, and the rigid film h - p_c(h) / k (m) it stands on; built once
+    per pad surface, contact model, offset and bed stiffness (a cold start on every point of a
+    sweep would otherwise build it again)."""
+    pad, sigma = problem.pad, problem.sigma
+    key = (pad, problem.variant, problem.separation_offset, problem.foundation.stiffness, sigma)
+    table = _CONTACT_ONLY_TABLES.get(key)
+    if table is None:
+        cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
+        h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
+        h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
+        hr_tab = h_tab - problem.contact(h_tab)[0] / problem.foundation.stiffness
+        if len(_CONTACT_ONLY_TABLES) >= 64:
+            _CONTACT_ONLY_TABLES.clear()
+        table = _CONTACT_ONLY_TABLES[key] = (h_max, h_tab, hr_tab)
+    return table
 
 
 def deformed_film(problem, u, x, y) -> np.ndarray:
