@@ -201,10 +201,9 @@ def _face_coefficients(problem, rigid, w, ops) -> tuple:
 
 
 def _coefficients(problem, hr, ha) -> FaceCoefficients:
-    rad = lubrication_coefficients(hr, problem.xr, problem.yr, problem.lub)
-    ang = lubrication_coefficients(ha, problem.xa, problem.ya, problem.lub)
-    floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
-    return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
+    # both face sets in one evaluation, with the face kinematics the problem computed once
+    c = lubrication_coefficients(np.stack([hr, ha]), problem._xf, problem._yf, problem.lub, problem._vf)
+    return FaceCoefficients(tuple(a[0] for a in c[:5]), tuple(a[1] for a in c[:5]), int(np.count_nonzero(c[5])), c[5].size)
 
 
 def _slurry_pressure(problem, phi):
