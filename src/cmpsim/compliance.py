@@ -490,11 +490,7 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
     return J
 
 
-#: The joint Newton (:func:`joint_equilibrium`) hands over to the nested solve after this many steps.
-_MAX_JOINT = 30
-
-
-def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = _MAX_JOINT, max_step: float = 0.5):
+def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_step: float = 0.5):
     """Film, pad deflection and wafer position by one Newton iteration on (phi, w, u): (u, state, steps, history), or None.
 
     The nested solve (:func:`coupled_state` at every trial position of the equilibrium's

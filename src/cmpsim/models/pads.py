@@ -195,7 +195,7 @@ class RigidPad:
         return np.array([h0, 0.0, 0.0])
 
     # ------------------------------------------------------------------ joint Newton
-    def joint_newton(self, problem, u, tol: float, max_step: float):
+    def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
         """The equilibrium by one Newton iteration on the position and the pad's own unknowns, or
         None: the rigid pad has none, the driver's Newton on u alone solves it."""
         return None
@@ -306,12 +306,12 @@ class WinklerPad(RigidPad):
     def contact_only_start(self, problem) -> np.ndarray:
         return compliance.compliant_contact_only_start(problem)
 
-    def joint_newton(self, problem, u, tol: float, max_step: float):
+    def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
         """(u, state, steps, history) of Newton on (slurry pressure, deflection, position) together
         (:func:`cmpsim.compliance.joint_equilibrium`), or None if it does not converge."""
         if not self.joint:
             return None
-        return compliance.joint_equilibrium(problem, u, tol=tol, max_step=max_step)
+        return compliance.joint_equilibrium(problem, u, tol=tol, max_iter=max_iter, max_step=max_step)
 
     def resume_chain(self, problem) -> None:
         compliance.resume_chain(problem)
