@@ -583,9 +583,15 @@ def _joint_step(problem, ev: _Evaluation, F, lin: CoupledLinearisation, cols):
 
 
 def _joint_size(problem, step) -> float:
-    """Size of a joint step: the largest change of w (sigma), phi, and u (in ``u_scale``)."""
+    """Size of a joint step: the largest change of w (sigma), phi (in the slurry's
+    ``unknown_scale``: the applied pressure for p) and u (in ``u_scale``)."""
     du, dphi, dw = step
-    return max(float(np.max(np.abs(dw))) / problem.sigma, float(np.max(np.abs(dphi))), float(np.max(np.abs(du) / problem.u_scale)))
+    phi_scale = problem.slurry.unknown_scale(problem.applied_pressure)
+    return max(
+        float(np.max(np.abs(dw))) / problem.sigma,
+        float(np.max(np.abs(dphi))) / phi_scale,
+        float(np.max(np.abs(du) / problem.u_scale)),
+    )
 
 
 def _position_columns(problem, lin: CoupledLinearisation, u, ops, rel_step: float = 1e-6):
