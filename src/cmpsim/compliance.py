@@ -699,4 +699,21 @@ def deformed_film(problem, u, x, y) -> np.ndarray:
     w = _memory(problem).deflections.get(u.tobytes())
     if w is None:
         w = problem.state(u).deflection
-    return _rigid_film(problem, u, x, y) + problem.grid.interpolate(w, x, y)
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    return _rigid_film(problem, u, x, y) + (_interpolation(problem.grid, x, y) @ w.ravel()).reshape(x.shape)
+
+
+_INTERPOLATIONS: dict = {}
+
+
+def _interpolation(grid, x, y):
+    """:meth:`cmpsim.grid.PolarGrid.interpolation_matrix` of ``grid`` at the points (x, y), built
+    once per grid and points (the outputs ask for the film at the rim and the centre of every
+    solve)."""
+    key = (grid, x.shape, x.tobytes(), y.tobytes())
+    m = _INTERPOLATIONS.get(key)
+    if m is None:
+        if len(_INTERPOLATIONS) >= 32:
+            _INTERPOLATIONS.clear()
+        m = _INTERPOLATIONS[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
+    return m
