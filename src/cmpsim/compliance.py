@@ -647,14 +647,15 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         )
     # contact only, the local balance k w = p_c(h) with h = h_rigid + w inverts explicitly:
     # h_rigid = h - p_c(h) / k is increasing in h, so a table of it gives h from h_rigid
-    h_max, h_tab, hr_tab = _contact_only_table(problem)
+    h_max, h_tab, hr_tab, pc_tab = _contact_only_table(problem)
 
     def film(h0):
         hr = h0 + shape
         return np.where(hr >= h_max, hr, np.interp(hr, hr_tab, h_tab))
 
     def excess(h0):
-        return problem.grid.integrate(problem.contact(film(h0))[0]) / problem.load_scale - 1.0
+        # the contact pressure of the table's balance at each cell's rigid film: no kernel call
+        return problem.grid.integrate(np.interp(h0 + shape, hr_tab, pc_tab)) / problem.load_scale - 1.0
 
     h_hi = -shape.min() + h_max  # no contact even undeflected
     h_lo = -shape.max() + hr_tab[0]  # the film closes somewhere below this
@@ -671,10 +672,10 @@ _CONTACT_ONLY_TABLES: dict = {}
 
 
 def _contact_only_table(problem) -> tuple:
-    """(h_max, h, h_rigid) of the contact-only local balance: the film h (m) on 4001 points up to
-    h_max, where the contact ends, and the rigid film h - p_c(h) / k (m) it stands on; built once
-    per pad surface, contact model, offset and bed stiffness (a cold start on every point of a
-    sweep would otherwise build it again)."""
+    """(h_max, h, h_rigid, p_c) of the contact-only local balance: the film h (m) on 4001 points
+    up to h_max, where the contact ends, the rigid film h - p_c(h) / k (m) it stands on and the
+    contact pressure p_c(h) (Pa); built once per pad surface, contact model, offset and bed
+    stiffness (a cold start on every point of a sweep would otherwise build it again)."""
     pad, sigma = problem.pad, problem.sigma
     key = (pad, problem.variant, problem.separation_offset, problem.foundation.stiffness, sigma)
     table = _CONTACT_ONLY_TABLES.get(key)
@@ -682,10 +683,11 @@ def _contact_only_table(problem) -> tuple:
         cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
         h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
         h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
-        hr_tab = h_tab - problem.contact(h_tab)[0] / problem.foundation.stiffness
+        pc_tab = problem.contact(h_tab)[0]
+        hr_tab = h_tab - pc_tab / problem.foundation.stiffness
         if len(_CONTACT_ONLY_TABLES) >= 64:
             _CONTACT_ONLY_TABLES.clear()
-        table = _CONTACT_ONLY_TABLES[key] = (h_max, h_tab, hr_tab)
+        table = _CONTACT_ONLY_TABLES[key] = (h_max, h_tab, hr_tab, pc_tab)
     return table
 
 
