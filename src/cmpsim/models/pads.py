@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .. import compliance
+from .. import compliance, jointnewton
 from ..padstack import LayeredFoundation, PadLayer, WinklerFoundation
 from ..reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients
 from ..state import EquilibriumError, PressureState
@@ -308,10 +308,10 @@ class WinklerPad(RigidPad):
 
     def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
         """(u, state, steps, history) of Newton on (slurry pressure, deflection, position) together
-        (:func:`cmpsim.compliance.joint_equilibrium`), or None if it does not converge."""
+        (:func:`cmpsim.jointnewton.joint_equilibrium`), or None if it does not converge."""
         if not self.joint:
             return None
-        return compliance.joint_equilibrium(problem, u, tol=tol, max_iter=max_iter, max_step=max_step)
+        return jointnewton.joint_equilibrium(problem, u, tol=tol, max_iter=max_iter, max_step=max_step)
 
     def resume_chain(self, problem) -> None:
         compliance.resume_chain(problem)

@@ -1,0 +1,134 @@
+"""The Winkler pad's equilibrium by one Newton iteration on slurry pressure, deflection and position.
+
+The nested solve of :mod:`cmpsim.compliance` converges the film and the pad deflection (phi, w)
+at every trial position u of the equilibrium's Newton on u, and factorises once more at each
+converged state for the Jacobian (a cold default equilibrium on 24x64: 3 coupled states, 16
+residual evaluations, 5 LU). Here the balance residuals join the coupled Newton system as a
+border, so that one iteration moves (phi, w, u) together: 2 LU and 7 residual evaluations for
+the same equilibrium (``docs/model.md``, "Pad compliance", and ``docs/performance.md``, issue 23).
+The nested solve stays the fall-back and the layered pad's solve.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .compliance import (
+    _CONTRACTION,
+    _MAX_DW,
+    _STEP_TOL,
+    _converged_state,
+    _evaluate,
+    _face_operators,
+    _linearise,
+    _memory,
+    _position_columns,
+    _rigid_film,
+    _start,
+)
+
+__all__ = ["joint_equilibrium"]
+
+
+def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_step: float = 0.5):
+    """Film, pad deflection and wafer position by one Newton iteration on (phi, w, u): (u, state, steps, history), or None.
+
+    The nested solve (:func:`coupled_state` at every trial position of the equilibrium's
+    Newton on u, :func:`coupled_jacobian` at each converged state) converges (phi, w) at
+    positions far from the equilibrium and factorises once more for each Jacobian. Here the
+    balance residuals F(phi, w, u) join the Newton system as a border of the coupled one:
+
+        [S_phi,w   (R_u, G_u)] [d(phi, w)]     [(R, G)]
+        [F_phi,w   0         ] [du       ] = - [F     ],
+
+    solved with the factorisation of the coupled matrix and four back-substitutions (the
+    three columns of :func:`_position_columns` and the step at fixed u), du from the 3 x 3
+    Schur complement (the equilibrium's Jacobian J). A factorisation is kept for the next step
+    (a chord step) while its steps contract by :data:`_CONTRACTION`. Steps are limited like
+    the nested ones: du to ``max_step`` (in units of ``problem.u_scale``), the deflection to
+    :data:`_MAX_DW` sigma, the film to half its thickness. Converged when the last full step
+    is below :data:`_STEP_TOL` (as the nested solve's last inner step) and max |F| < ``tol``:
+    the same solution as the nested solve, to its tolerances.
+
+    Returns None (and leaves the problem's memory as it found it) if it does not converge in
+    ``max_iter`` steps or a step leaves the admissible films: the caller then solves nested.
+    """
+    ops = _face_operators(problem.grid)
+    mem = _memory(problem)
+    saved = (mem.last, mem.tangent, mem.lin)
+    sigma = problem.sigma
+    u = np.asarray(u, dtype=float).copy()
+    try:
+        if mem.tangent is None and mem.last is not None and np.array_equal(mem.last[0], u):
+            # the contact-only start (or a state solved here): no local balance first, Newton balances w
+            phi, w = mem.last[1], mem.last[2]
+        else:
+            phi, w = _start(problem, u, mem)
+        lin = cols = prev = size = None
+        history = []
+        for it in range(max_iter + 1):
+            ev = _evaluate(problem, u, phi, w, ops)
+            F = problem._residual(ev.p_total)
+            history.append((u.copy(), F.copy()))
+            if not np.all(np.isfinite(F)):
+                break
+            if size is not None and size < _STEP_TOL and np.max(np.abs(F)) < tol:
+                st = _converged_state(problem, ev, lin)
+                J, dphi_du, dw_du = cols
+                mem.tangent = (u.copy(), phi.copy(), w.copy(), dphi_du.reshape(phi.shape + (3,)), dw_du.reshape(phi.shape + (3,)))
+                return u, st, it, history
+            if it == max_iter:
+                break
+            step = None
+            if lin is not None and prev is not None:  # chord step with the last factorisation
+                step = _joint_step(problem, ev, F, lin, cols)
+                if _joint_size(problem, step) > _CONTRACTION * prev:
+                    step = None
+            if step is None:
+                lin = _linearise(problem, ev, ops)
+                cols = _position_columns(problem, lin, u, ops)
+                step = _joint_step(problem, ev, F, lin, cols)
+            size = _joint_size(problem, step)
+            du, dphi, dw = step
+            # the trust region of the position, the nested solve's limits on the deflection and film
+            scale = min(1.0, max_step / max(float(np.max(np.abs(du) / problem.u_scale)), 1e-300))
+            scale = min(scale, _MAX_DW * sigma / max(float(np.max(np.abs(dw))), 1e-300))
+            dh = dw.reshape(w.shape) + _rigid_film(problem, u + du, problem.xc, problem.yc) - (ev.h - w)
+            shrink = dh < -0.5 * ev.h
+            if np.any(shrink):
+                scale = min(scale, float(np.min(-0.5 * ev.h[shrink] / dh[shrink])))
+            u = u + scale * du
+            phi = phi + scale * dphi.reshape(phi.shape)
+            w = w + scale * dw.reshape(w.shape)
+            lin.drift += scale * size
+            if scale < 1.0:
+                size, prev = None, None
+            else:
+                prev = size
+            if problem.slurry.diverges(phi):
+                break
+    except (ValueError, np.linalg.LinAlgError, FloatingPointError):
+        pass
+    mem.last, mem.tangent, mem.lin = saved
+    return None
+
+
+def _joint_step(problem, ev: _Evaluation, F, lin: CoupledLinearisation, cols):
+    """(du, dphi, dw) of the bordered Newton system of :func:`joint_equilibrium`."""
+    J, dphi_du, dw_du = cols
+    dphi0, dw0 = lin.solve(ev.R, ev.G)
+    dP0 = lin.P_phi * dphi0 + lin.P_h * dw0
+    du = -np.linalg.solve(J, F + problem.carrier.residual_change(problem, dP0.reshape(ev.phi.shape)))
+    return du, dphi0 + dphi_du @ du, dw0 + dw_du @ du
+
+
+def _joint_size(problem, step) -> float:
+    """Size of a joint step: the largest change of w (sigma), phi (in the slurry's
+    ``unknown_scale``: the applied pressure for p) and u (in ``u_scale``)."""
+    du, dphi, dw = step
+    phi_scale = problem.slurry.unknown_scale(problem.applied_pressure)
+    return max(
+        float(np.max(np.abs(dw))) / problem.sigma,
+        float(np.max(np.abs(dphi))) / phi_scale,
+        float(np.max(np.abs(du) / problem.u_scale)),
+    )
