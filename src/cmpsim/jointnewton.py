@@ -15,7 +15,10 @@ import numpy as np
 
 from .compliance import (
     _CONTRACTION,
+    CoupledLinearisation,
+    _Evaluation,
     _MAX_DW,
+    _REUSE_FIRST,
     _STEP_TOL,
     _converged_state,
     _evaluate,
@@ -31,24 +34,36 @@ __all__ = ["joint_equilibrium"]
 
 
 def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_step: float = 0.5):
-    """Film, pad deflection and wafer position by one Newton iteration on (phi, w, u): (u, state, steps, history), or None.
+    """Film, pad deflection and wafer position by one Newton iteration: (u, state, steps, history), or None.
 
-    The nested solve (:func:`coupled_state` at every trial position of the equilibrium's
-    Newton on u, :func:`coupled_jacobian` at each converged state) converges (phi, w) at
-    positions far from the equilibrium and factorises once more for each Jacobian. Here the
-    balance residuals F(phi, w, u) join the Newton system as a border of the coupled one:
+    The nested solve (:func:`cmpsim.compliance.coupled_state` at every trial position of the
+    equilibrium's Newton on u, :func:`cmpsim.compliance.coupled_jacobian` at each converged
+    state) converges (phi, w) at positions far from the equilibrium and factorises once more
+    for each Jacobian. Here the balance residuals F(phi, w, u) (eq. 31 and the moments, see
+    :mod:`cmpsim.equilibrium`) join the coupled Newton system as a border:
 
         [S_phi,w   (R_u, G_u)] [d(phi, w)]     [(R, G)]
         [F_phi,w   0         ] [du       ] = - [F     ],
 
-    solved with the factorisation of the coupled matrix and four back-substitutions (the
-    three columns of :func:`_position_columns` and the step at fixed u), du from the 3 x 3
-    Schur complement (the equilibrium's Jacobian J). A factorisation is kept for the next step
-    (a chord step) while its steps contract by :data:`_CONTRACTION`. Steps are limited like
-    the nested ones: du to ``max_step`` (in units of ``problem.u_scale``), the deflection to
-    :data:`_MAX_DW` sigma, the film to half its thickness. Converged when the last full step
-    is below :data:`_STEP_TOL` (as the nested solve's last inner step) and max |F| < ``tol``:
-    the same solution as the nested solve, to its tolerances.
+    solved with the factorisation of the coupled matrix and four back-substitutions (the step
+    at fixed u and the three columns d(phi, w)/du of the equilibrium's Jacobian), du from the
+    3 x 3 Schur complement J. A factorisation is kept (a chord step) while the steps contract
+    by 0.05; a warm start first tries the last equilibrium's factorisation (its first step
+    must be below 1e-4). Steps are limited like the nested ones and scaled together: du to
+    ``max_step`` (units of ``problem.u_scale``), the deflection to 0.25 sigma, the film to
+    half its thickness. Converged at the iterate whose balances are below ``tol`` (max |F|)
+    and whose Newton step is below 1e-8 (w in sigma, u in ``u_scale``, phi in the slurry's
+    ``unknown_scale``): the nested solve's solution to its tolerances.
+
+    Parameters
+    ----------
+    problem : cmpsim.wafer.WaferProblem
+        On a local (Winkler) bed.
+    u : array_like
+        Start (h0 [m], attack angle [rad], cross tilt [rad]); the start of (phi, w) is the
+        problem's memory (the contact-only start, a chain's last equilibrium, a tangent).
+    tol, max_iter, max_step
+        As :func:`cmpsim.equilibrium.solve_equilibrium`'s (``max_iter`` counts joint steps).
 
     Returns None (and leaves the problem's memory as it found it) if it does not converge in
     ``max_iter`` steps or a step leaves the admissible films: the caller then solves nested.
@@ -64,7 +79,11 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
             phi, w = mem.last[1], mem.last[2]
         else:
             phi, w = _start(problem, u, mem)
-        lin = cols = prev = size = None
+        # a warm start first tries the factorisation of the last equilibrium (of its chain, or of
+        # this problem), as a chord step accepted only if its first step is below _REUSE_FIRST
+        lin = mem.lin if mem.lin is not None and mem.lin.layer is None else None
+        cols = None if lin is None else _position_columns(problem, lin, u, ops)
+        prev = None  # size of the last full step: a chord step must contract on it
         history = []
         for it in range(max_iter + 1):
             ev = _evaluate(problem, u, phi, w, ops)
@@ -72,23 +91,24 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
             history.append((u.copy(), F.copy()))
             if not np.all(np.isfinite(F)):
                 break
-            if size is not None and size < _STEP_TOL and np.max(np.abs(F)) < tol:
-                st = _converged_state(problem, ev, lin)
-                J, dphi_du, dw_du = cols
-                mem.tangent = (u.copy(), phi.copy(), w.copy(), dphi_du.reshape(phi.shape + (3,)), dw_du.reshape(phi.shape + (3,)))
-                return u, st, it, history
-            if it == max_iter:
-                break
             step = None
-            if lin is not None and prev is not None:  # chord step with the last factorisation
+            if lin is not None and (prev is not None or it == 0):  # chord step with the last factorisation
                 step = _joint_step(problem, ev, F, lin, cols)
-                if _joint_size(problem, step) > _CONTRACTION * prev:
+                if _joint_size(problem, step) > (_REUSE_FIRST if it == 0 else _CONTRACTION * prev):
                     step = None
             if step is None:
                 lin = _linearise(problem, ev, ops)
                 cols = _position_columns(problem, lin, u, ops)
                 step = _joint_step(problem, ev, F, lin, cols)
             size = _joint_size(problem, step)
+            if size < _STEP_TOL and np.max(np.abs(F)) < tol:
+                # converged: the balances hold and the next Newton step would move nothing
+                st = _converged_state(problem, ev, lin)
+                J, dphi_du, dw_du = cols
+                mem.tangent = (u.copy(), phi.copy(), w.copy(), dphi_du.reshape(phi.shape + (3,)), dw_du.reshape(phi.shape + (3,)))
+                return u, st, it, history
+            if it == max_iter:
+                break
             du, dphi, dw = step
             # the trust region of the position, the nested solve's limits on the deflection and film
             scale = min(1.0, max_step / max(float(np.max(np.abs(du) / problem.u_scale)), 1e-300))
@@ -101,10 +121,7 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
             phi = phi + scale * dphi.reshape(phi.shape)
             w = w + scale * dw.reshape(w.shape)
             lin.drift += scale * size
-            if scale < 1.0:
-                size, prev = None, None
-            else:
-                prev = size
+            prev = size if scale == 1.0 else None
             if problem.slurry.diverges(phi):
                 break
     except (ValueError, np.linalg.LinAlgError, FloatingPointError):
