@@ -91,6 +91,10 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
             history.append((u.copy(), F.copy()))
             if not np.all(np.isfinite(F)):
                 break
+            if prev is not None and prev < _STEP_TOL and np.max(np.abs(F)) < tol:
+                return _converged(problem, ev, lin, cols, it, history)
+            if it == max_iter:
+                break
             step = None
             if lin is not None and (prev is not None or it == 0):  # chord step with the last factorisation
                 step = _joint_step(problem, ev, F, lin, cols)
@@ -101,14 +105,9 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
                 cols = _position_columns(problem, lin, u, ops)
                 step = _joint_step(problem, ev, F, lin, cols)
             size = _joint_size(problem, step)
-            if size < _STEP_TOL and np.max(np.abs(F)) < tol:
-                # converged: the balances hold and the next Newton step would move nothing
-                st = _converged_state(problem, ev, lin)
-                J, dphi_du, dw_du = cols
-                mem.tangent = (u.copy(), phi.copy(), w.copy(), dphi_du.reshape(phi.shape + (3,)), dw_du.reshape(phi.shape + (3,)))
-                return u, st, it, history
-            if it == max_iter:
-                break
+            if it == 0 and size < _STEP_TOL and np.max(np.abs(F)) < tol:
+                # the start is an equilibrium already (a point solved again from its own): kept as it is
+                return _converged(problem, ev, lin, cols, it, history)
             du, dphi, dw = step
             # the trust region of the position, the nested solve's limits on the deflection and film
             scale = min(1.0, max_step / max(float(np.max(np.abs(du) / problem.u_scale)), 1e-300))
@@ -128,6 +127,15 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
         pass
     mem.last, mem.tangent, mem.lin = saved
     return None
+
+
+def _converged(problem, ev: _Evaluation, lin: CoupledLinearisation, cols, steps: int, history: list):
+    """(u, state, steps, history) of the converged evaluation ``ev``; the tangent d(phi, w)/du kept for the next start."""
+    st = _converged_state(problem, ev, lin)
+    _, dphi_du, dw_du = cols
+    shape = ev.phi.shape
+    _memory(problem).tangent = (ev.u.copy(), ev.phi.copy(), ev.w.copy(), dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)))
+    return ev.u, st, steps, history
 
 
 def _joint_step(problem, ev: _Evaluation, F, lin: CoupledLinearisation, cols):
