@@ -31,6 +31,9 @@ import cmpsim
 from cmpsim.config import Config
 from cmpsim.models.pads import WinklerPad
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_scale import max_rel_diff  # noqa: E402  (the same comparison of scalars)
+
 KEEP = ("removal_rate_mean", "within_wafer_nonuniformity", "h0", "attack_angle", "cross_tilt",
         "film_thickness_center", "film_thickness_min", "fluid_load_fraction", "contact_area_ratio", "shear_stress_mean")
 _300 = {"wafer_diameter": "300 mm", "centre_distance": "0.2 m"}
@@ -67,17 +70,6 @@ def measure(repeat: int) -> dict:
     finally:
         WinklerPad.joint = True
     return rows
-
-
-def max_rel_diff(a: dict, b: dict) -> tuple[float, str]:
-    """Largest relative difference of two scalar dicts (the cross tilt on the attack angle's scale)."""
-    worst, which = 0.0, ""
-    for k, va in a.items():
-        scale = abs(a["attack_angle"]) if k == "cross_tilt" else abs(va)
-        d = abs(va - b[k]) / max(scale, 1e-300)
-        if d > worst:
-            worst, which = d, k
-    return worst, which
 
 
 def main(argv=None) -> int:
