@@ -42,8 +42,9 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
     for each Jacobian. Here the balance residuals F(phi, w, u) (eq. 31 and the moments, see
     :mod:`cmpsim.equilibrium`) join the coupled Newton system as a border:
 
-        [S_phi,w   (R_u, G_u)] [d(phi, w)]     [(R, G)]
-        [F_phi,w   0         ] [du       ] = - [F     ],
+        A dphi + R_w dw + R_u du = -R
+        -P_phi dphi + (k - P_h) dw + G_u du = -G
+        F_phi dphi + F_w dw = -F,
 
     solved with the factorisation of the coupled matrix and four back-substitutions (the step
     at fixed u and the three columns d(phi, w)/du of the equilibrium's Jacobian), du from the
@@ -65,8 +66,12 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
     tol, max_iter, max_step
         As :func:`cmpsim.equilibrium.solve_equilibrium`'s (``max_iter`` counts joint steps).
 
-    Returns None (and leaves the problem's memory as it found it) if it does not converge in
-    ``max_iter`` steps or a step leaves the admissible films: the caller then solves nested.
+    Returns
+    -------
+    tuple or None
+        (u, :class:`~cmpsim.state.PressureState`, steps, history of (u, F)); None (the
+        problem's memory left as it was found) if it does not converge in ``max_iter`` steps
+        or a step leaves the admissible films: the caller then solves nested.
     """
     ops = _face_operators(problem.grid)
     mem = _memory(problem)
