@@ -468,3 +468,29 @@ def test_inside_the_zmc_band_a_harder_film_is_not_indented_less():
     assert omega[0] < omega[1] < omega[2] and omega[2] > omega[3] > omega[4] >= omega[5]
     hertz = (3 * F[0] / (4 * c.e_star * math.sqrt(r))) ** (2 / 3) / r
     assert omega[5] == pytest.approx(hertz, rel=1e-12)
+
+
+def test_the_size_length_sweeps_in_micrometres_and_calibrates_from_a_size_series(tmp_path):
+    """film_size_length is an ordinary registry input: a sweep takes it in um, and `cmpsim calibrate
+    --free film_size_length` recovers it from a (synthetic) size series of the user's own film."""
+    import tomllib
+
+    from cmpsim import calibrate
+    from cmpsim.sweeps import SweepSpec, sweep
+
+    base = '[base]\ngrid = "coarse"\nfilm = "copper"\nabrasive = "alumina"\nparticle_diameter = "100 nm"\n'
+    ds = sweep(SweepSpec.from_mapping(tomllib.loads(base + '[axes]\nfilm_size_length = ["0 um", "1 um"]\n')), workers=0, progress=False)
+    assert ds["film_size_length"].values.tolist() == [0.0, pytest.approx(1e-6)]
+    rr = ds["removal_rate_mean"].values
+    assert rr[1] < 0.7 * rr[0]  # 100 nm alumina on copper: H = 1.5 GPa x sqrt(21) = 6.9 GPa, a shallower groove
+
+    truth = cmpsim.Config.default().replace(grid="coarse", film="copper", abrasive="alumina", film_size_length="1 um")
+    rows = []
+    for d in (100, 400, 1500):
+        r = cmpsim.solve(truth, particle_diameter=f"{d} nm", relative=False)
+        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{d} nm")
+    path = tmp_path / "sizes.csv"
+    path.write_text("# dataset: synthetic\n# citation: made by the model\n# provenance: test\n# conditions: default\n"
+                    "dataset,quantity,value,unit,uncertainty,comparison,particle_diameter\n" + "\n".join(rows) + "\n")
+    fit = calibrate(path, free=["film_size_length"], config=truth.replace(film_size_length="0.6 um"), progress=False)
+    assert fit.values["film_size_length"] == pytest.approx(1e-6, rel=1e-3)

@@ -28,6 +28,8 @@ Dornfeld (IEEE Trans. Semicond. Manuf. 14, 112 (2001); 16, 469 (2003)), Zhao & C
    plastic law of the pad summits (``cmpsim.contact``), with the particle-film effective modulus
    E* and the hardness and K = 0.454 + 0.41 nu of the softer body; the film takes the share
    C_f / (C_f + C_a) of it (C = (1 - nu^2)/E, each body's Hertz compliance): delta = omega C_f / (C_f + C_a).
+   A film with an indentation size length R* > 0 is harder under small particles,
+   H(r) = H_0 sqrt(1 + R*/r) (:func:`size_hardness`; Nix & Gao 1998, Swadener et al. 2002).
 4. **Ploughed volume.** Sliding with the pad at |u_pad - u_wafer|, the particle sweeps the
    circular segment of depth delta of its own section: A_g = r^2 (theta - sin theta cos theta),
    cos theta = 1 - delta / r. A share k_a (``abrasion_efficiency``) of the ploughed groove
