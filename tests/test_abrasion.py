@@ -314,18 +314,24 @@ def test_the_new_inputs_sweep_with_units_and_choices(tmp_path):
 
 def test_the_two_step_constants_can_be_calibrated(tmp_path):
     """`cmpsim calibrate --free chemical_rate` fits the chemical step to data it limits."""
+    truth = cmpsim.Config.default().replace(grid="coarse", removal_kinetics="two_step", chemical_rate="60 nm/min")
+    fit = _recalibrate(tmp_path, truth, "applied_pressure", ("2 psi", "4 psi", "6 psi"), "chemical_rate", "150 nm/min")
+    assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
+
+
+def _recalibrate(tmp_path, truth, column, values, free, start):
+    """Write the removal rates `truth` computes at `column` = each of `values` as a data file and
+    calibrate `free` on it from `start` (a round trip through `cmpsim calibrate`)."""
     from cmpsim import calibrate
 
-    truth = cmpsim.Config.default().replace(grid="coarse", removal_kinetics="two_step", chemical_rate="60 nm/min")
     rows = []
-    for psi in (2, 4, 6):
-        r = cmpsim.solve(truth, applied_pressure=f"{psi} psi", relative=False)
-        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{psi} psi")
-    path = tmp_path / "two_step.csv"
+    for v in values:
+        r = cmpsim.solve(truth, **{column: v}, relative=False)
+        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{v}")
+    path = tmp_path / "synthetic.csv"
     path.write_text("# dataset: synthetic\n# citation: made by the model\n# provenance: test\n# conditions: default\n"
-                    "dataset,quantity,value,unit,uncertainty,comparison,applied_pressure\n" + "\n".join(rows) + "\n")
-    fit = calibrate(path, free=["chemical_rate"], config=truth.replace(chemical_rate="150 nm/min"), progress=False)
-    assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
+                    f"dataset,quantity,value,unit,uncertainty,comparison,{column}\n" + "\n".join(rows) + "\n")
+    return calibrate(path, free=[free], config=truth.replace(**{free: start}), progress=False)
 
 
 def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_computes():
@@ -475,7 +481,6 @@ def test_the_size_length_sweeps_in_micrometres_and_calibrates_from_a_size_series
     --free film_size_length` recovers it from a (synthetic) size series of the user's own film."""
     import tomllib
 
-    from cmpsim import calibrate
     from cmpsim.sweeps import SweepSpec, sweep
 
     base = '[base]\ngrid = "coarse"\nfilm = "copper"\nabrasive = "alumina"\nparticle_diameter = "100 nm"\n'
@@ -485,12 +490,5 @@ def test_the_size_length_sweeps_in_micrometres_and_calibrates_from_a_size_series
     assert rr[1] < 0.7 * rr[0]  # 100 nm alumina on copper: H = 1.5 GPa x sqrt(21) = 6.9 GPa, a shallower groove
 
     truth = cmpsim.Config.default().replace(grid="coarse", film="copper", abrasive="alumina", film_size_length="1 um")
-    rows = []
-    for d in (100, 400, 1500):
-        r = cmpsim.solve(truth, particle_diameter=f"{d} nm", relative=False)
-        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{d} nm")
-    path = tmp_path / "sizes.csv"
-    path.write_text("# dataset: synthetic\n# citation: made by the model\n# provenance: test\n# conditions: default\n"
-                    "dataset,quantity,value,unit,uncertainty,comparison,particle_diameter\n" + "\n".join(rows) + "\n")
-    fit = calibrate(path, free=["film_size_length"], config=truth.replace(film_size_length="0.6 um"), progress=False)
+    fit = _recalibrate(tmp_path, truth, "particle_diameter", ("100 nm", "400 nm", "1500 nm"), "film_size_length", "0.6 um")
     assert fit.values["film_size_length"] == pytest.approx(1e-6, rel=1e-3)
