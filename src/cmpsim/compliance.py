@@ -64,9 +64,7 @@ __all__ = [
     "CoupledLinearisation",
     "coupled_state",
     "coupled_jacobian",
-    "coupled_sensitivity",
-    "expect_film_change",
-    "film_response",
+    "film_change",
     "compliant_contact_only_start",
     "deformed_film",
     "local_deflection",
@@ -203,10 +201,9 @@ def _face_coefficients(problem, rigid, w, ops) -> tuple:
 
 
 def _coefficients(problem, hr, ha) -> FaceCoefficients:
-    rad = lubrication_coefficients(hr, problem.xr, problem.yr, problem.lub)
-    ang = lubrication_coefficients(ha, problem.xa, problem.ya, problem.lub)
-    floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
-    return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
+    # both face sets in one evaluation, with the face kinematics the problem computed once
+    c = lubrication_coefficients(np.stack([hr, ha]), problem._xf, problem._yf, problem.lub, problem._vf)
+    return FaceCoefficients(tuple(a[0] for a in c[:5]), tuple(a[1] for a in c[:5]), int(np.count_nonzero(c[5])), c[5].size)
 
 
 def _slurry_pressure(problem, phi):
@@ -447,6 +444,13 @@ def coupled_state(problem, u):
         prev = size if scale == 1.0 else None
     else:
         raise ValueError(f"the coupled film and pad deflection did not converge in {_MAX_INNER} Newton steps")
+    return _converged_state(problem, ev, lin)
+
+
+def _converged_state(problem, ev: _Evaluation, lin: CoupledLinearisation) -> PressureState:
+    """The :class:`PressureState` of a converged evaluation, remembered for the deformed film and warm starts."""
+    u, phi, w = ev.u, ev.phi, ev.w
+    mem = _memory(problem)
     res = problem._residual(ev.p_total)
     mem.remember(u, phi, w)
     mem.lin = lin
@@ -474,17 +478,31 @@ def _state_linearisation(problem, st) -> CoupledLinearisation:
     return lin
 
 
-def film_response(problem, st, dh, dhr, dha):
-    """The linear change of the pressure at a solved compliant state under a change of the film at fixed u.
+def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
+    """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
 
-    ``dh``, ``dhr``, ``dha`` (m, flat) are the change of the film the carrier imposes at the cell
-    centres and on the radial and angular faces (a change of position u, or of the wafer's
-    bending); the slurry unknown and the pad deflection follow it through the coupled Newton
-    system at the state (implicit differentiation, one back-substitution):
-    returns (dP, dphi, dw), dP = P_phi dphi + P_h (dh + dw) the change of the total pressure (Pa, flat).
+    For each component of u the Reynolds residual and the local balance are differentiated at
+    fixed (phi, w), and the coupled system is solved with the state's factorisation: three
+    back-substitutions. The face coefficients depend on u only through the film on each face,
+    so dR/du is the face-flux slopes of the linearisation times d(rigid film)/du on the faces
+    (a finite difference of the geometry alone: no coefficient evaluation, no assembly).
     """
-    ops = _face_operators(problem.grid)
     lin = _state_linearisation(problem, st)
+    J, dphi_du, dw_du = _position_columns(problem, lin, st.u, _face_operators(problem.grid), rel_step)
+    shape = st.phi.shape
+    _memory(problem).tangent = (
+        st.u.copy(), st.phi.copy(), st.deflection.copy(),
+        dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
+    )
+    return J
+
+
+def film_change(problem, lin: CoupledLinearisation, dh, dhr, dha, ops):
+    """(dP, dphi, dw): the linear change of the total pressure (Pa), of the slurry unknown and of the
+    pad deflection (m) of the system linearised in ``lin`` under a change of the carrier's film at
+    fixed u, ``dh``, ``dhr``, ``dha`` (m, flat) at the cell centres, radial and angular faces
+    (dR: the face-flux slopes times the face films; dG = -P_h dh or its nonlocal image): one
+    back-substitution."""
     s_rad, s_ang = lin.face_slopes
     dR = ops.div_radial @ (s_rad * dhr) + ops.div_angular @ (s_ang * dha)
     dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)
@@ -493,55 +511,28 @@ def film_response(problem, st, dh, dhr, dha):
     return lin.P_phi * dphi + lin.P_h * (dh + dw), dphi, dw
 
 
-def expect_film_change(problem, st, dh, dhr, dha) -> np.ndarray:
-    """:func:`film_response` at the state of the last Jacobian or sensitivity, whose tangent predictor
-    it then moves by the linear change of the slurry unknown and the pad deflection: the next coupled
-    solve starts where the film change (a new bending of the wafer) is expected to lead, plus the
-    tangent's own change with u. Returns the change of the total pressure (Pa, flat)."""
-    dP, dphi, dw = film_response(problem, st, dh, dhr, dha)
-    mem = _memory(problem)
-    if mem.tangent is not None and np.array_equal(mem.tangent[0], st.u):  # the tangent at st: its base is st's (phi, w)
-        ut, _, _, dphi_du, dw_du = mem.tangent
-        mem.tangent = (ut, st.phi + dphi.reshape(st.phi.shape), st.deflection + dw.reshape(st.phi.shape), dphi_du, dw_du)
-    return dP
-
-
-def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
-    """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
+def _position_columns(problem, lin: CoupledLinearisation, u, ops, rel_step: float = 1e-6):
+    """(J, dphi/du, dw/du) of the coupled system linearised in ``lin``, at position u.
 
     For each component of u the Reynolds residual and the local balance are differentiated at
-    fixed (phi, w), and the coupled system is solved with the state's factorisation: three
-    back-substitutions (:func:`film_response`). The face coefficients depend on u only through
-    the film on each face, so dR/du is the face-flux slopes of the linearisation times
-    d(rigid film)/du on the faces (a finite difference of the geometry alone: no coefficient
-    evaluation, no assembly).
+    fixed (phi, w) (the face-flux slopes of ``lin`` times d(rigid film)/du on the faces: a
+    finite difference of the geometry alone) and the coupled system is solved with ``lin``'s
+    factorisation: three back-substitutions. J (3 x 3) is d(balance residuals)/du along the
+    solution; dphi/du and dw/du are (cells, 3).
     """
-    return coupled_sensitivity(problem, st, rel_step)[0]
-
-
-def coupled_sensitivity(problem, st, rel_step: float = 1e-6):
-    """(J, dP/du) at a solved compliant state: the Jacobian d(residual)/du of :func:`coupled_jacobian`
-    and the change of the total pressure per unit change of each component of u (Pa per unit of u,
-    shape (n_r, n_theta, 3)). Keeps the tangent predictor of the next coupled solve."""
+    n = lin.P_phi.size
     J = np.empty((3, 3))
-    dP_du = np.empty((st.phi.size, 3))
-    dphi_du = np.empty((st.phi.size, 3))
-    dw_du = np.empty((st.phi.size, 3))
+    dphi_du = np.empty((n, 3))
+    dw_du = np.empty((n, 3))
     points = ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya))
-    base = [_rigid_film(problem, st.u, x, y) for x, y in points]
+    base = [_rigid_film(problem, u, x, y) for x, y in points]
     for k in range(3):
         du = np.zeros(3)
         du[k] = rel_step * problem.u_scale[k]
-        u = st.u + du
-        dh, dhr, dha = (((_rigid_film(problem, u, x, y) - b) / du[k]).ravel() for (x, y), b in zip(points, base))
-        dP_du[:, k], dphi_du[:, k], dw_du[:, k] = film_response(problem, st, dh, dhr, dha)
-        J[:, k] = problem.carrier.residual_change(problem, dP_du[:, k].reshape(st.phi.shape))
-    shape = st.phi.shape
-    _memory(problem).tangent = (
-        st.u.copy(), st.phi.copy(), st.deflection.copy(),
-        dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
-    )
-    return J, dP_du.reshape(shape + (3,))
+        dh, dhr, dha = (((_rigid_film(problem, u + du, x, y) - b) / du[k]).ravel() for (x, y), b in zip(points, base))
+        dP, dphi_du[:, k], dw_du[:, k] = film_change(problem, lin, dh, dhr, dha, ops)
+        J[:, k] = problem.carrier.residual_change(problem, dP.reshape(base[0].shape))
+    return J, dphi_du, dw_du
 
 
 def _same_set(a, b) -> bool:
@@ -567,17 +558,15 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         )
     # contact only, the local balance k w = p_c(h) with h = h_rigid + w inverts explicitly:
     # h_rigid = h - p_c(h) / k is increasing in h, so a table of it gives h from h_rigid
-    cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
-    h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
-    h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
-    hr_tab = h_tab - problem.contact(h_tab)[0] / problem.foundation.stiffness
+    h_max, h_tab, hr_tab, pc_tab = _contact_only_table(problem)
 
     def film(h0):
         hr = h0 + shape
         return np.where(hr >= h_max, hr, np.interp(hr, hr_tab, h_tab))
 
     def excess(h0):
-        return problem.grid.integrate(problem.contact(film(h0))[0]) / problem.load_scale - 1.0
+        # the contact pressure of the table's balance at each cell's rigid film: no kernel call
+        return problem.grid.integrate(np.interp(h0 + shape, hr_tab, pc_tab)) / problem.load_scale - 1.0
 
     h_hi = -shape.min() + h_max  # no contact even undeflected
     h_lo = -shape.max() + hr_tab[0]  # the film closes somewhere below this
@@ -585,9 +574,32 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         raise EquilibriumError("no film balances the contact load on the compliant pad")
     h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * sigma, rtol=1e-12)
     u = np.array([h0, 0.0, 0.0])
-    w = local_deflection(problem, h0 + shape, np.zeros_like(shape), film(h0) - (h0 + shape))
-    _memory(problem).last = (u, np.zeros_like(shape), w)
+    # the deflection of the table (the coupled solve's start balances it to round-off: :func:`_start`)
+    _memory(problem).last = (u, np.zeros_like(shape), film(h0) - (h0 + shape))
     return u
+
+
+_CONTACT_ONLY_TABLES: dict = {}
+
+
+def _contact_only_table(problem) -> tuple:
+    """(h_max, h, h_rigid, p_c) of the contact-only local balance: the film h (m) on 4001 points
+    up to h_max, where the contact ends, the rigid film h - p_c(h) / k (m) it stands on and the
+    contact pressure p_c(h) (Pa); built once per pad surface, contact model, offset and bed
+    stiffness (a cold start on every point of a sweep would otherwise build it again)."""
+    pad, sigma = problem.pad, problem.sigma
+    key = (pad, problem.variant, problem.separation_offset, problem.foundation.stiffness, sigma)
+    table = _CONTACT_ONLY_TABLES.get(key)
+    if table is None:
+        cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
+        h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
+        h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
+        pc_tab = problem.contact(h_tab)[0]
+        hr_tab = h_tab - pc_tab / problem.foundation.stiffness
+        if len(_CONTACT_ONLY_TABLES) >= 64:
+            _CONTACT_ONLY_TABLES.clear()
+        table = _CONTACT_ONLY_TABLES[key] = (h_max, h_tab, hr_tab, pc_tab)
+    return table
 
 
 def deformed_film(problem, u, x, y) -> np.ndarray:
@@ -600,4 +612,21 @@ def deformed_film(problem, u, x, y) -> np.ndarray:
     w = _memory(problem).deflections.get(u.tobytes())
     if w is None:
         w = problem.state(u).deflection
-    return _rigid_film(problem, u, x, y) + problem.grid.interpolate(w, x, y)
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    return _rigid_film(problem, u, x, y) + (_interpolation(problem.grid, x, y) @ w.ravel()).reshape(x.shape)
+
+
+_INTERPOLATIONS: dict = {}
+
+
+def _interpolation(grid, x, y):
+    """:meth:`cmpsim.grid.PolarGrid.interpolation_matrix` of ``grid`` at the points (x, y), built
+    once per grid and points (the outputs ask for the film at the rim and the centre of every
+    solve)."""
+    key = (grid, x.shape, x.tobytes(), y.tobytes())
+    m = _INTERPOLATIONS.get(key)
+    if m is None:
+        if len(_INTERPOLATIONS) >= 32:
+            _INTERPOLATIONS.clear()
+        m = _INTERPOLATIONS[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
+    return m

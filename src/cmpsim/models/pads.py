@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .. import compliance
+from .. import compliance, jointnewton, sensitivity
 from ..padstack import LayeredFoundation, PadLayer, WinklerFoundation
 from ..reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients
 from ..state import EquilibriumError, PressureState
@@ -194,6 +194,12 @@ class RigidPad:
             h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * problem.sigma, rtol=1e-12)
         return np.array([h0, 0.0, 0.0])
 
+    # ------------------------------------------------------------------ joint Newton
+    def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
+        """The equilibrium by one Newton iteration on the position and the pad's own unknowns, or
+        None: the rigid pad has none, the driver's Newton on u alone solves it."""
+        return None
+
     # ------------------------------------------------------------------ chains of points
     def resume_chain(self, problem) -> None:
         """Nothing to carry: the rigid solve refines against the chain's last LU (:mod:`cmpsim.equilibrium`)."""
@@ -257,6 +263,9 @@ class WinklerPad(RigidPad):
     """
 
     name = "winkler"
+    #: Solve the film, the deflection and the position in one Newton iteration (the local bed's
+    #: coupled matrix is factorised; the layered pad's is solved by GMRES, nested).
+    joint = True
     chord_steps = False
     adaptive_trust = False
     coarse_starts = False
@@ -295,22 +304,29 @@ class WinklerPad(RigidPad):
         return compliance.coupled_jacobian(problem, st, rel_step)
 
     def sensitivity(self, problem, st: PressureState, rel_step: float = 1e-6):
-        """(d(residual)/du, d(total pressure)/du) at a solved state (:func:`cmpsim.compliance.coupled_sensitivity`)."""
-        return compliance.coupled_sensitivity(problem, st, rel_step)
+        """(d(residual)/du, d(total pressure)/du) at a solved state (:func:`cmpsim.sensitivity.coupled_sensitivity`)."""
+        return sensitivity.coupled_sensitivity(problem, st, rel_step)
 
     def film_response(self, problem, st: PressureState, dh, dhr, dha) -> np.ndarray:
         """The linear change of the total pressure (Pa, flat) at a solved state under a change of the carrier's
         film at fixed u: ``dh``, ``dhr``, ``dha`` (m, flat) at the cell centres, radial and angular faces
-        (:func:`cmpsim.compliance.film_response`)."""
-        return compliance.film_response(problem, st, dh, dhr, dha)[0]
+        (:func:`cmpsim.sensitivity.film_response`)."""
+        return sensitivity.film_response(problem, st, dh, dhr, dha)[0]
 
     def expect_film_change(self, problem, st: PressureState, dh, dhr, dha) -> np.ndarray:
         """:meth:`film_response`, and the next coupled solve starts from the film and deflection it predicts
-        (:func:`cmpsim.compliance.expect_film_change`)."""
-        return compliance.expect_film_change(problem, st, dh, dhr, dha)
+        (:func:`cmpsim.sensitivity.expect_film_change`)."""
+        return sensitivity.expect_film_change(problem, st, dh, dhr, dha)
 
     def contact_only_start(self, problem) -> np.ndarray:
         return compliance.compliant_contact_only_start(problem)
+
+    def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
+        """(u, state, steps, history) of Newton on (slurry pressure, deflection, position) together
+        (:func:`cmpsim.jointnewton.joint_equilibrium`), or None if it does not converge."""
+        if not self.joint:
+            return None
+        return jointnewton.joint_equilibrium(problem, u, tol=tol, max_iter=max_iter, max_step=max_step)
 
     def resume_chain(self, problem) -> None:
         compliance.resume_chain(problem)
@@ -327,6 +343,7 @@ class LayerPad(WinklerPad):
     """
 
     name = "layer"
+    joint = False
     foundation_type = LayeredFoundation
 
     @classmethod
