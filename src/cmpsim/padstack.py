@@ -14,7 +14,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 __all__ = [
     "PadLayer",
@@ -225,56 +224,43 @@ _LAYER_OPERATORS: dict = {}
 
 
 class _LayerOperator:
-    """Deflection of the nonlocal compliance on a periodic Cartesian grid, seen from the polar grid.
+    """Deflection of the nonlocal compliance at the polar cell centres: exact cell integrals of its kernel.
 
-    The square auxiliary grid (spacing dr/2, dr the widest ring: the central rings of an
-    edge-graded grid) covers the wafer and a margin of six coupling lengths (at least 4 dr)
-    around it, so that the periodic images of the wafer interact only through tails that have
-    decayed by about e^-12. The pressure of a polar cell field is
-    interpolated to the Cartesian cell centres (PolarGrid.interpolate) and weighted by the
-    share of each Cartesian cell inside the wafer (16 sub-points per cell); the deflection
-    w = IFFT(C(q) FFT(p)) is interpolated back to the polar cell centres (bilinear).
+    The pressure is uniform in each cell; the deflection at the centre of cell i is
+    Σ_j K_ij p_j with K_ij the integral over cell j of the radial kernel G(|x_i - x'|) of
+    C(q) (:mod:`cmpsim.padinfluence`: boundary integrals of the kernel's radial primitive,
+    tabulated once from C(q) by quadrature in q). The rings may be equal or edge-graded: every
+    cell is integrated on its own extent, so the rim rings of a graded grid are resolved as
+    they are. K is block-circulant over the sectors, applied by a real FFT over them and one
+    n_r x n_r matrix per angular mode. The pad outside the wafer carries no load (the
+    retaining ring's load is added by the carrier, :meth:`LayeredFoundation.annulus_deflection`).
     """
 
-    def __init__(self, foundation: LayeredFoundation, grid):
-        from scipy.fft import next_fast_len
+    #: C(q) is integrated to q = _Q_TOP / (thinnest layer), where the plate term has cut it by
+    #: about 10^7 (two layers) or where a single layer is a half space to round-off (its 2/(E* q)
+    #: tail is added in closed form); the kernel's near field is tabulated to _REACH coupling
+    #: lengths, where it has decayed below 10^-9 of C(0) (docs/model.md, section 13c).
+    _Q_TOP = 40.0
+    _REACH = 40.0
 
-        R = grid.radius
-        dr = float(np.max(grid.widths))  # the central ring width (graded rings: not the rim's)
-        h = 0.5 * dr
-        margin = max(6.0 * foundation.coupling_length, 4.0 * dr)
-        n = next_fast_len(int(np.ceil(2.0 * (R + margin) / h)), real=True)
-        self.n, self.h = n, h
-        c = -0.5 * n * h + (np.arange(n) + 0.5) * h
-        X, Y = np.meshgrid(c, c, indexing="ij")
-        # share of each Cartesian cell inside the wafer, from 4 x 4 sub-points
-        sub = (np.arange(4) + 0.5) / 4.0 - 0.5
-        frac = np.zeros(X.shape)
-        for sx in sub:
-            for sy in sub:
-                frac += (X + sx * h) ** 2 + (Y + sy * h) ** 2 <= R * R
-        frac /= 16.0
-        inside = np.flatnonzero(frac.ravel() > 0)
-        self.inside = inside
-        self.remap = (sp.diags(frac.ravel()[inside]) @ grid.interpolation_matrix(X.ravel()[inside], Y.ravel()[inside])).tocsr()
-        # bilinear from the Cartesian cell centres to the polar cell centres
-        xc, yc = grid.centres
-        fx = (xc.ravel() - c[0]) / h
-        fy = (yc.ravel() - c[0]) / h
-        i0, j0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
-        tx, ty = fx - i0, fy - j0
-        rows = np.repeat(np.arange(grid.size), 4)
-        cols = np.stack([i0 * n + j0, (i0 + 1) * n + j0, i0 * n + j0 + 1, (i0 + 1) * n + j0 + 1], axis=1).ravel()
-        vals = np.stack([(1 - tx) * (1 - ty), tx * (1 - ty), (1 - tx) * ty, tx * ty], axis=1).ravel()
-        self.sample = sp.csr_matrix((vals, (rows, cols)), shape=(grid.size, n * n))
-        kx = 2.0 * np.pi * np.fft.fftfreq(n, h)
-        ky = 2.0 * np.pi * np.fft.rfftfreq(n, h)
-        q = np.hypot(kx[:, None], ky[None, :])
-        self.kernel = foundation.nonlocal_compliance(q)
+    def __init__(self, foundation: LayeredFoundation, grid):
+        from .padinfluence import angular_modes, radial_primitive, ring_influence
+
+        layers = foundation.layers
+        t_min = min(layer.thickness for layer in layers)
+        tail = 0.0
+        if len(layers) == 1:  # C = 1 / K(q) -> 2 / (E* q): a half space beyond qt = 40
+            tail = 2.0 * (1.0 - layers[0].poisson ** 2) / layers[0].modulus
+        length = foundation.coupling_length
+        self.shape = (grid.n_r, grid.n_theta)
+        near, self.reach = radial_primitive(
+            foundation.nonlocal_compliance, self._Q_TOP / t_min, min(2.0 * grid.radius, self._REACH * length), length, tail=tail
+        )
+        c0 = float(foundation.nonlocal_compliance(np.array([0.0]))[0])
+        self.modes = angular_modes(ring_influence(near, self.reach, c0, grid.ring_faces, grid.n_theta))
 
     def apply(self, pressure) -> np.ndarray:
         """Nonlocal deflection (m, flat, cell order) of a polar cell pressure field (Pa)."""
-        p = np.zeros(self.n * self.n)
-        p[self.inside] = self.remap @ np.asarray(pressure, dtype=float).ravel()
-        w = np.fft.irfft2(self.kernel * np.fft.rfft2(p.reshape(self.n, self.n)), s=(self.n, self.n))
-        return self.sample @ w.ravel()
+        from .padinfluence import apply_modes
+
+        return apply_modes(self.modes, np.asarray(pressure, dtype=float).reshape(self.shape)).ravel()
