@@ -54,6 +54,7 @@ from .grid import face_operators as _face_operators
 from .padstack import *  # noqa: F403
 from .padstack import __all__ as _PADSTACK
 from .coupling import coupled_newton_matrices
+from .padstiffness import layer_newton_matrix, pad_laplacian
 from .krylov import gmres as _gmres  # looked up at call time: benchmarks/bench_house.py swaps it
 from .reynolds import FaceCoefficients, factorize, lubrication_coefficients
 from .state import EquilibriumError, PressureState
@@ -268,7 +269,7 @@ class CoupledLinearisation:
     # ---- layered pad (nonlocal compliance): the system is solved by GMRES, preconditioned by
     # the Winkler system above (the same stack's long-wave stiffness k)
     A: sp.csr_matrix | None = None
-    layer: object = None  # (k, deflection: callable pressure -> deflection, sigma) or None
+    layer: object = None  # (k, deflection: callable pressure -> deflection, sigma, g, c_loc) or None
     krylov_iterations: int = 0
     # d(face flux)/d(face film) on the radial and angular faces (flat): R_w, and dR/du in the Jacobian
     face_slopes: tuple | None = None
@@ -280,7 +281,8 @@ class CoupledLinearisation:
 
         Winkler bed: J = [A R_w; -P_phi K], solved exactly with the factorisation. Layered pad:
         the second row is k (dw - C (P_phi dphi + P_h dw)) with the nonlocal C; GMRES on the
-        system left-preconditioned by the Winkler one.
+        system left-preconditioned by the same system with a sparse stand-in for the pad's
+        stiffness (:mod:`cmpsim.padstiffness`).
         """
         if self.layer is None:
             return self._solve_local(R, G)
@@ -291,6 +293,24 @@ class CoupledLinearisation:
         dw = (self.P_phi * dphi - G) / self.K
         return dphi, dw
 
+    def approximate_step(self, R, G):
+        """The Newton step of the factorised system: exact on a Winkler bed, the preconditioner's on a layered pad."""
+        if self.layer is None:
+            return self._solve_local(R, G)
+        dphi, dw = self._precondition(-R, -G)
+        return dphi, dw
+
+    def _precondition(self, r1, r2):
+        """(dphi, dw) solving the sparse stand-in J_p (dphi, dw) = (r1, r2) of the layered system
+        (pad stiffness k0 - b L + D L^2; :func:`cmpsim.padstiffness.layer_newton_matrix`)."""
+        k, _, _, g, c_loc = self.layer
+        n = r1.size
+        z = r2 / k
+        x = np.asarray(self.factor.solve(np.concatenate([r1 - self.R_w @ (g * z), g * self.P_h * z])))
+        dphi, v = x[:n], x[n:]
+        p = g * (self.P_phi * dphi + self.P_h * (v + z))
+        return dphi, v + c_loc * p + z
+
     def deflection(self, pressure):
         """C p (m) for a flat cell field (Pa): p / k on a Winkler bed."""
         if self.layer is None:
@@ -298,11 +318,11 @@ class CoupledLinearisation:
         return self.layer[1](pressure)
 
     def _solve_layer(self, R, G):
-        k, deflect, sigma = self.layer
+        k, deflect, sigma = self.layer[:3]
         n = R.size
 
-        def precondition(r1, r2):  # the Winkler system: J_W^-1 (r1, r2)
-            a, b = self._solve_local(-r1, -r2)
+        def precondition(r1, r2):
+            a, b = self._precondition(r1, r2)
             return np.concatenate([a, b / sigma])
 
         def matvec(x):
@@ -312,7 +332,7 @@ class CoupledLinearisation:
             r2 = k * (dw - deflect(self.P_phi * dphi + self.P_h * dw))
             return precondition(r1, r2)
 
-        rhs = precondition(-R, -G)  # the Winkler step
+        rhs = precondition(-R, -G)  # the preconditioner's step
         if not np.any(rhs):
             return np.zeros(n), np.zeros(n)
         # an inexact Newton step: 1e-6 of the step is far below what the outer iterations need
@@ -337,16 +357,17 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
     K = k - P_h
     R_w, S = coupled_newton_matrices(grid, ev.matrix, s_rad, s_ang, P_phi / K)
+    f = problem.foundation
+    if not f.local:  # the layered pad: factorise the preconditioner's sparse system instead
+        S, g = layer_newton_matrix(ev.matrix, R_w, P_phi, P_h, f.local_compliance, f.stiffness_polynomial(), pad_laplacian(grid, f.coupling_length))
     factor = (problem.solver or factorize)(S)
     problem.factorizations += 1
     lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
     lin.face_slopes = (s_rad, s_ang)
     lin.cavitated = problem.slurry.cavitated(ev.phi)
-    f = problem.foundation
     if not f.local:
-        grid = problem.grid
         lin.A = ev.matrix
-        lin.layer = (k, lambda p: f.deflection(p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma)
+        lin.layer = (k, lambda p: f.deflection(p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma, g, f.local_compliance)
     return lin
 
 
@@ -410,8 +431,8 @@ def coupled_state(problem, u):
     for _ in range(_MAX_INNER):
         dphi = dw = None
         if lin is not None:  # chord step with the factorisation at hand
-            # (on a layered pad, judge by the cheap Winkler step before paying for GMRES)
-            dphi, dw = lin.solve(ev.R, ev.G) if lin.layer is None else lin._solve_local(ev.R, ev.G)
+            # (on a layered pad, judge by the preconditioner's cheap step before paying for GMRES)
+            dphi, dw = lin.approximate_step(ev.R, ev.G)
             size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
             if size > (_REUSE_FIRST if prev is None else _CONTRACTION * prev):
                 dphi = None

@@ -194,6 +194,20 @@ class LayeredFoundation:
         integrand = load[None, :] * j0(np.outer(r.ravel(), q))
         return pressure * simpson(integrand, x=q, axis=1).reshape(r.shape)
 
+    def stiffness_polynomial(self) -> tuple[float, float, float]:
+        """(k0, b, D): the polynomial k0 + b q^2 + D q^4 (Pa/m, Pa, Pa m) closest to 1 / (nonlocal C(q)).
+
+        Exact at q = 0 (k0) and in its q^4 term (the top pad's bending stiffness D; none for a single
+        layer), b fitted at q = 1 / coupling length. A sparse stand-in for the stack's stiffness
+        (a Laplacian and a biharmonic on the grid): the preconditioner of the coupled Newton
+        system (:mod:`cmpsim.padstiffness`), not a model of the pad.
+        """
+        k0 = 1.0 / float(self.nonlocal_compliance(np.array([0.0]))[0])
+        d = plate_bending_stiffness(*(lambda t: (t.thickness, t.modulus, t.poisson))(self.layers[0])) if len(self.layers) == 2 else 0.0
+        q1 = 1.0 / self.coupling_length
+        b = (1.0 / float(self.nonlocal_compliance(np.array([q1]))[0]) - k0 - d * q1**4) / q1**2
+        return k0, max(b, 0.0), d
+
     @property
     def coupling_length(self) -> float:
         """How far a load spreads: the stack thickness, or the plate length (D_1/k_2)^(1/4), m."""
