@@ -302,7 +302,7 @@ class CoupledLinearisation:
 
     def _precondition(self, r1, r2):
         """(dphi, dw) solving the sparse stand-in J_p (dphi, dw) = (r1, r2) of the layered system
-        (pad stiffness k0 - b L + D L^2; :func:`cmpsim.padstiffness.layer_newton_matrix`)."""
+        (pad stiffness k0 - b L; :func:`cmpsim.padstiffness.layer_newton_matrix`)."""
         k, _, _, g, c_loc = self.layer
         n = r1.size
         z = r2 / k
@@ -359,7 +359,7 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     R_w, S = coupled_newton_matrices(grid, ev.matrix, s_rad, s_ang, P_phi / K)
     f = problem.foundation
     if not f.local:  # the layered pad: factorise the preconditioner's sparse system instead
-        S, g = layer_newton_matrix(ev.matrix, R_w, P_phi, P_h, f.local_compliance, f.stiffness_polynomial(), pad_laplacian(grid, f.coupling_length))
+        S, g = layer_newton_matrix(ev.matrix, R_w, P_phi, P_h, f.local_compliance, f.stiffness_quadratic(), pad_laplacian(grid, f.coupling_length))
     factor = (problem.solver or factorize)(S)
     problem.factorizations += 1
     lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())

@@ -37,9 +37,10 @@ __all__ = ["radial_primitive", "ring_influence", "angular_modes", "apply_modes"]
 #: Gauss-Legendre nodes on each side of the closest point of an edge: near edges (closer than
 #: twice their length) and far ones.
 _NEAR_NODES, _FAR_NODES = 16, 6
+_GAUSS = {n: np.polynomial.legendre.leggauss(n) for n in (8, _NEAR_NODES, _FAR_NODES)}
 
 
-def radial_primitive(compliance, q_max: float, rho_max: float, length: float, tail: float = 0.0, n: int = 600, decayed: float = 1e-9):
+def radial_primitive(compliance, q_max: float, rho_max: float, length: float, tail: float = 0.0, n: int = 400, decayed: float = 1e-9):
     """The near field of the kernel's radial primitive: (near, reach) with near(ρ) = (F(ρ) - F_∞)/ρ, m/Pa/m.
 
     ``compliance(q)`` is C(q) (m/Pa, q in rad/m); F(ρ) = (ρ/2π) ∫_0^∞ C(q) J1(qρ) dq is tabulated
@@ -57,7 +58,7 @@ def radial_primitive(compliance, q_max: float, rho_max: float, length: float, ta
     xi = np.linspace(0.0, np.arcsinh(rho_max / a), n)
     rho = a * np.sinh(xi)
     f_inf = float(compliance(np.array([0.0]))[0]) / (2.0 * np.pi)
-    x, wx = np.polynomial.legendre.leggauss(8)
+    x, wx = _GAUSS[8]
     F = np.zeros(n)
     # nodes in blocks of similar radius: each block takes panels a quarter period of its largest rho wide
     for start in range(1, n, 40):
@@ -98,7 +99,7 @@ def _edge_integral(near, delta, before, after, weight):
             idx = np.flatnonzero(pick & (length > 0))
             if idx.size == 0:
                 continue
-            x, wx = np.polynomial.legendre.leggauss(nodes)
+            x, wx = _GAUSS[nodes]
             top = np.arcsinh(length[idx] / delta[idx])[:, None]
             u = 0.5 * top * (x[None, :] + 1.0)
             d = delta[idx][:, None]

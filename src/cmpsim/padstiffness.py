@@ -3,9 +3,8 @@
 The layered pad's compliance C = c_loc + C_nl (``docs/model.md``, section 13c) is dense on the
 grid (:mod:`cmpsim.padinfluence`); its coupled Newton system with the film is solved by GMRES
 (:mod:`cmpsim.compliance`). The preconditioner is the same system with 1/C_nl(q) replaced by
-the polynomial k0 + b q^2 + D q^4 (:meth:`cmpsim.padstack.LayeredFoundation.stiffness_polynomial`),
-on the grid the sparse operator K = k0 I - b L + D L^2 with the finite-volume Laplacian L of the
-polar cells. Unlike the Winkler bed (K = k0 I), it is stiff in the short waves, as the pad is,
+the quadratic k0 + b q^2 (:meth:`cmpsim.padstack.LayeredFoundation.stiffness_quadratic`), on the
+grid the sparse operator K = k0 I - b L with the finite-volume Laplacian L of the polar cells. Unlike the Winkler bed (K = k0 I), it is stiff in the short waves, as the pad is,
 which keeps the preconditioned spectrum clustered where the film is stiff as well (docs/performance.md).
 
 With v the nonlocal deflection (K v = p), w = c_loc p + v and p = P_phi dphi + P_h dw, the
@@ -49,18 +48,16 @@ def pad_laplacian(grid: PolarGrid, outside: float) -> sp.csr_matrix:
     return L
 
 
-def layer_newton_matrix(A, R_w, P_phi, P_h, local_compliance: float, polynomial, laplacian) -> sp.csc_matrix:
+def layer_newton_matrix(A, R_w, P_phi, P_h, local_compliance: float, quadratic, laplacian) -> tuple[sp.csc_matrix, np.ndarray]:
     """The sparse (dphi, v) Newton matrix of the module docstring (2 N x 2 N, CSC), and g.
 
     ``A``: dR/dphi; ``R_w``: dR/dw; ``P_phi``, ``P_h``: the pad pressure's derivatives (flat);
-    ``polynomial``: (k0, b, D); ``laplacian``: :func:`pad_laplacian`.
+    ``local_compliance``: c_loc (m/Pa); ``quadratic``: (k0, b); ``laplacian``: :func:`pad_laplacian`.
     """
-    k0, b, d = polynomial
+    k0, b = quadratic
     n = P_phi.size
     g = 1.0 / (1.0 - local_compliance * P_h)
     K = sp.identity(n, format="csr") * k0 - b * laplacian
-    if d:
-        K = K + d * (laplacian @ laplacian)
     top = sp.hstack([A + R_w @ sp.diags(local_compliance * g * P_phi), R_w @ sp.diags(g)])
     bottom = sp.hstack([sp.diags(-g * P_phi), K - sp.diags(g * P_h)])
     return sp.vstack([top, bottom]).tocsc(), g
