@@ -34,7 +34,10 @@ BASELINE = "933f237"
 CHILD = r"""
 import json, sys, time
 import cmpsim
-import cmpsim.padstack as padstack
+try:
+    from cmpsim.padgrid import _LAYER_OPERATORS as LAYER_CACHE  # after issue 23
+except ImportError:
+    from cmpsim.padstack import _LAYER_OPERATORS as LAYER_CACHE
 from cmpsim.config import Config
 
 repeat, cases = int(sys.argv[1]), json.loads(sys.argv[2])
@@ -47,7 +50,7 @@ for name, (preset, overrides) in cases.items():
         times = []
         for _ in range(repeat):
             if label == "cold":
-                padstack._LAYER_OPERATORS.clear()
+                LAYER_CACHE.clear()
             t = time.process_time()
             r = cmpsim.solve(cfg, relative=False)
             times.append(time.process_time() - t)

@@ -54,7 +54,7 @@ from .grid import face_operators as _face_operators
 from .padstack import *  # noqa: F403
 from .padstack import __all__ as _PADSTACK
 from .coupling import coupled_newton_matrices
-from .padstiffness import layer_newton_matrix, pad_laplacian
+from .padgrid import layer_deflection, layer_newton_matrix, pad_laplacian
 from .krylov import gmres as _gmres  # looked up at call time: benchmarks/bench_house.py swaps it
 from .reynolds import FaceCoefficients, factorize, lubrication_coefficients
 from .state import EquilibriumError, PressureState
@@ -237,7 +237,7 @@ def _evaluate(problem, u, phi, w, ops, rigid=None) -> _Evaluation:
     if f.local:
         G = (k * w - p_fluid - contact[0]).ravel()
     else:  # k (w - C p): the same scale as on the Winkler bed, to which it reduces when C = 1/k
-        G = k * (w.ravel() - f.deflection(p_fluid + contact[0], problem.grid).ravel())
+        G = k * (w.ravel() - layer_deflection(f, p_fluid + contact[0], problem.grid).ravel())
     return _Evaluation(u, phi, w, h, face_h, coeffs, A, R, G, p_abs, p_fluid, contact)
 
 
@@ -282,7 +282,7 @@ class CoupledLinearisation:
         Winkler bed: J = [A R_w; -P_phi K], solved exactly with the factorisation. Layered pad:
         the second row is k (dw - C (P_phi dphi + P_h dw)) with the nonlocal C; GMRES on the
         system left-preconditioned by the same system with a sparse stand-in for the pad's
-        stiffness (:mod:`cmpsim.padstiffness`).
+        stiffness (:mod:`cmpsim.padgrid`).
         """
         if self.layer is None:
             return self._solve_local(R, G)
@@ -302,7 +302,7 @@ class CoupledLinearisation:
 
     def _precondition(self, r1, r2):
         """(dphi, dw) solving the sparse stand-in J_p (dphi, dw) = (r1, r2) of the layered system
-        (pad stiffness k0 - b L; :func:`cmpsim.padstiffness.layer_newton_matrix`)."""
+        (pad stiffness k0 - b L; :func:`cmpsim.padgrid.layer_newton_matrix`)."""
         k, _, _, g, c_loc = self.layer
         n = r1.size
         z = r2 / k
@@ -367,7 +367,7 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     lin.cavitated = problem.slurry.cavitated(ev.phi)
     if not f.local:
         lin.A = ev.matrix
-        lin.layer = (k, lambda p: f.deflection(p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma, g, f.local_compliance)
+        lin.layer = (k, lambda p: layer_deflection(f, p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma, g, f.local_compliance)
     return lin
 
 

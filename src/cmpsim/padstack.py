@@ -3,8 +3,8 @@
 Pure kernels of the pad's bulk deformation (``docs/model.md``, "Pad compliance"): the
 constrained modulus of a layer, the stiffness of layers in series (a Winkler bed, w = p / k),
 the Fourier stiffness of an elastic layer on a rigid base, and the plate-on-layer compliance
-C(q) of a top pad on a softer subpad, applied to a polar pressure field by FFT on a Cartesian
-auxiliary grid. The coupled solve of the film with this deflection is in
+C(q) of a top pad on a softer subpad (applied to a pressure field on the polar grid by
+:mod:`cmpsim.padgrid`, from the cell integrals of :mod:`cmpsim.padinfluence`). The coupled solve of the film with this deflection is in
 :mod:`cmpsim.compliance`; the pad models that pick one of these stacks by name are in
 :mod:`cmpsim.models.pads`.
 """
@@ -132,8 +132,7 @@ class LayeredFoundation:
 
     C(0) = 1/k of the same layers in series, so a load much wider than the stack deflects it
     like the Winkler bed of :class:`WinklerFoundation`. The pad outside the wafer carries no
-    load. The deflection of a pressure field on the polar grid is computed on a Cartesian
-    auxiliary grid by FFT (:meth:`operator`).
+    load. The deflection of a pressure field on the polar grid is :func:`cmpsim.padgrid.layer_deflection`.
     """
 
     layers: tuple
@@ -198,7 +197,7 @@ class LayeredFoundation:
         """(k0, b): the quadratic k0 + b q^2 (Pa/m, Pa) through 1 / (nonlocal C(q)) at q = 0 and at q = 2 / coupling length.
 
         A sparse stand-in for the stack's stiffness (a Laplacian on the grid), the preconditioner
-        of the coupled Newton system (:mod:`cmpsim.padstiffness`), not a model of the pad: it is
+        of the coupled Newton system (:mod:`cmpsim.padgrid`), not a model of the pad: it is
         exact for long waves and, unlike the Winkler bed k0, stiff in the short ones. (With the
         plate's D q^4 added the preconditioned systems took 12 GMRES iterations instead of 15, but
         the biharmonic's fill made the solve 25 % slower on the graded default preset.)
@@ -217,64 +216,3 @@ class LayeredFoundation:
         top, sub = self.layers
         d = plate_bending_stiffness(top.thickness, top.modulus, top.poisson)
         return max(total, (d * sub.compliance) ** 0.25)
-
-    def deflection(self, pressure, grid):
-        """Deflection (m) at the cell centres of ``grid`` under a cell pressure field (Pa)."""
-        p = np.asarray(pressure, dtype=float)
-        return (self.local_compliance * p.ravel() + self.operator(grid).apply(p)).reshape(p.shape)
-
-    def operator(self, grid) -> "_LayerOperator":
-        """The FFT deflection operator of the nonlocal part on ``grid`` (built once, cached)."""
-        key = (self, grid)
-        op = _LAYER_OPERATORS.get(key)
-        if op is None:
-            if len(_LAYER_OPERATORS) > 8:
-                _LAYER_OPERATORS.clear()
-            op = _LAYER_OPERATORS[key] = _LayerOperator(self, grid)
-        return op
-
-
-_LAYER_OPERATORS: dict = {}
-
-
-class _LayerOperator:
-    """Deflection of the nonlocal compliance at the polar cell centres: exact cell integrals of its kernel.
-
-    The pressure is uniform in each cell; the deflection at the centre of cell i is
-    Σ_j K_ij p_j with K_ij the integral over cell j of the radial kernel G(|x_i - x'|) of
-    C(q) (:mod:`cmpsim.padinfluence`: boundary integrals of the kernel's radial primitive,
-    tabulated once from C(q) by quadrature in q). The rings may be equal or edge-graded: every
-    cell is integrated on its own extent, so the rim rings of a graded grid are resolved as
-    they are. K is block-circulant over the sectors, applied by a real FFT over them and one
-    n_r x n_r matrix per angular mode. The pad outside the wafer carries no load (the
-    retaining ring's load is added by the carrier, :meth:`LayeredFoundation.annulus_deflection`).
-    """
-
-    #: C(q) is integrated to q = _Q_TOP / (thinnest layer), where the plate term has cut it by
-    #: about 10^7 (two layers) or where a single layer is a half space to round-off (its 2/(E* q)
-    #: tail is added in closed form); the kernel's near field is tabulated to _REACH coupling
-    #: lengths, where it has decayed below 10^-9 of C(0) (docs/model.md, section 13c).
-    _Q_TOP = 40.0
-    _REACH = 40.0
-
-    def __init__(self, foundation: LayeredFoundation, grid):
-        from .padinfluence import angular_modes, radial_primitive, ring_influence
-
-        layers = foundation.layers
-        t_min = min(layer.thickness for layer in layers)
-        tail = 0.0
-        if len(layers) == 1:  # C = 1 / K(q) -> 2 / (E* q): a half space beyond qt = 40
-            tail = 2.0 * (1.0 - layers[0].poisson ** 2) / layers[0].modulus
-        length = foundation.coupling_length
-        self.shape = (grid.n_r, grid.n_theta)
-        near, self.reach = radial_primitive(
-            foundation.nonlocal_compliance, self._Q_TOP / t_min, min(2.0 * grid.radius, self._REACH * length), length, tail=tail
-        )
-        c0 = float(foundation.nonlocal_compliance(np.array([0.0]))[0])
-        self.modes = angular_modes(ring_influence(near, self.reach, c0, grid.ring_faces, grid.n_theta))
-
-    def apply(self, pressure) -> np.ndarray:
-        """Nonlocal deflection (m, flat, cell order) of a polar cell pressure field (Pa)."""
-        from .padinfluence import apply_modes
-
-        return apply_modes(self.modes, np.asarray(pressure, dtype=float).reshape(self.shape)).ravel()
