@@ -49,7 +49,7 @@ def test_a_uniformly_loaded_disc_deflects_as_its_hankel_transform(stack):
     w = layer_operator(stack, g).apply(np.ones(g.size)).reshape(g.n_r, g.n_theta)
     ref = _hankel(stack, lambda q, r: R * jv(1, q * R) * jv(0, q * r), g.r[:, 0])
     assert np.ptp(w, axis=1).max() < 1e-12 * ref.max()  # the same in every sector
-    assert np.max(np.abs(w[:, 0] - ref)) < 1e-6 * ref.max()
+    assert np.max(np.abs(w[:, 0] - ref)) < 1e-7 * ref.max()  # 1.2e-8
     assert w[-1, 0] < 0.8 * w[0, 0]  # the unloaded pad outside holds the rim up
 
 

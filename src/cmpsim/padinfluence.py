@@ -24,7 +24,7 @@ the deflection at the cell centre i is Σ_j K_ij p_j with K_ij = ∫_{cell j} G(
   n_r² (n_θ/2 + 1) numbers, applied by a real FFT over the sectors and one n_r x n_r matrix
   per angular mode (:func:`angular_modes`).
 
-F(ρ) is tabulated once by Gauss-Legendre quadrature in q (panels a quarter oscillation of
+F(ρ) is tabulated once by Gauss-Legendre quadrature in q (panels half an oscillation of
 J1(qρ) wide) and interpolated by a cubic spline in asinh(ρ/a).
 """
 
@@ -36,7 +36,7 @@ __all__ = ["radial_primitive", "ring_influence", "angular_modes", "apply_modes"]
 
 #: Gauss-Legendre nodes on each side of the closest point of an edge: near edges (closer than
 #: twice their length) and far ones.
-_NEAR_NODES, _FAR_NODES = 16, 6
+_NEAR_NODES, _FAR_NODES = 12, 6
 _GAUSS = {n: np.polynomial.legendre.leggauss(n) for n in (8, _NEAR_NODES, _FAR_NODES)}
 
 
@@ -60,10 +60,10 @@ def radial_primitive(compliance, q_max: float, rho_max: float, length: float, ta
     f_inf = float(compliance(np.array([0.0]))[0]) / (2.0 * np.pi)
     x, wx = _GAUSS[8]
     F = np.zeros(n)
-    # nodes in blocks of similar radius: each block takes panels a quarter period of its largest rho wide
+    # nodes in blocks of similar radius: each block takes panels half a period of its largest rho wide (8 nodes each)
     for start in range(1, n, 40):
         block = slice(start, min(start + 40, n))
-        width = min(0.5 * np.pi / rho[block][-1], 0.25 / length)
+        width = min(np.pi / rho[block][-1], 0.5 / length)
         edges = np.linspace(0.0, q_max, int(np.ceil(q_max / width)) + 1)
         half = 0.5 * np.diff(edges)
         q = (0.5 * (edges[1:] + edges[:-1]))[:, None] + half[:, None] * x[None, :]
