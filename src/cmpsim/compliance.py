@@ -34,10 +34,11 @@ differentiation, three back-substitutions), and so does a tangent predictor that
 next solve close to its solution.
 
 With lateral coupling (:class:`LayeredFoundation`, ``pad_compliance = "layer"``) the deflection is
-w = C p with a nonlocal compliance C (the top pad as a plate on an elastic subpad layer, applied
-by FFT on a Cartesian auxiliary grid); G becomes k (w - C p), and the same Newton system is
-solved by GMRES preconditioned by the Winkler factorisation of the same stack, whose stiffness k
-is the long-wavelength limit of C.
+w = C p with a nonlocal compliance C (the top pad as a plate on an elastic subpad layer, its
+kernel integrated exactly over the polar cells: :mod:`cmpsim.padgrid`); G becomes k (w - C p),
+and the Newton system is solved by GMRES preconditioned by the factorisation of the same system
+with a sparse (Laplacian) stand-in for the pad's stiffness, exact for the long waves where C
+tends to the bed's 1/k (:func:`cmpsim.padgrid.layer_newton_matrix`).
 """
 
 from __future__ import annotations
@@ -256,7 +257,8 @@ def _load_derivative_h(problem, phi, h):
 class CoupledLinearisation:
     """Newton matrix of the coupled (phi, w) system with w eliminated, factorised once.
 
-    ``factor`` solves S = A + R_w diag(P_phi / K); K = k - P_h. All vectors flat (cell order).
+    ``factor`` solves S = A + R_w diag(P_phi / K); K = k - P_h (Winkler bed), or, on a layered pad,
+    the 2N (dphi, v) matrix of :func:`cmpsim.padgrid.layer_newton_matrix`. All vectors flat (cell order).
     """
 
     factor: object
@@ -266,8 +268,8 @@ class CoupledLinearisation:
     K: np.ndarray
     u: np.ndarray  # position where it was built
     drift: float = 0.0  # how far the iterate moved since (max |dw| / sigma, |dphi|), summed
-    # ---- layered pad (nonlocal compliance): the system is solved by GMRES, preconditioned by
-    # the Winkler system above (the same stack's long-wave stiffness k)
+    # ---- layered pad (nonlocal compliance): the system is solved by GMRES, preconditioned by the
+    # factorisation above of the (dphi, v) system with the sparse stand-in stiffness (cmpsim.padgrid)
     A: sp.csr_matrix | None = None
     layer: object = None  # (k, deflection: callable pressure -> deflection, sigma, g, c_loc) or None
     krylov_iterations: int = 0
