@@ -331,3 +331,29 @@ def test_layered_pad_outputs_converge_with_the_grid():
     assert abs(rr[2] - rr[1]) < 0.5 * abs(rr[1] - rr[0])
     assert abs(nu[2] - nu[1]) < 0.5 * abs(nu[1] - nu[0])
     assert abs(rr[2] / rr[1] - 1) < 2e-3 and abs(nu[2] - nu[1]) < 5e-3
+
+
+def test_the_layered_pads_preconditioner_keeps_gmres_short(monkeypatch):
+    # the coupled system with a sparse (Laplacian) stand-in for the pad's stiffness preconditions
+    # GMRES (cmpsim.padgrid); with the Winkler bed as preconditioner the same solve took 31-70
+    # iterations per system on the default model (docs/performance.md)
+    import cmpsim.compliance as compliance
+
+    counts = []
+    gmres = compliance._gmres
+
+    def counting(matvec, b, x0, rtol, max_iter):
+        n = [0]
+
+        def mv(x):
+            n[0] += 1
+            return matvec(x)
+
+        x = gmres(mv, b, x0, rtol, max_iter)
+        counts.append(n[0])
+        return x
+
+    monkeypatch.setattr(compliance, "_gmres", counting)
+    r = cmpsim.solve(relative=False, pad_compliance="layer", grid="24x64")
+    assert r.converged and counts
+    assert np.mean(counts) < 25 and max(counts) < 40, counts
