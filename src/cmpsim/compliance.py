@@ -202,10 +202,9 @@ def _face_coefficients(problem, rigid, w, ops) -> tuple:
 
 
 def _coefficients(problem, hr, ha) -> FaceCoefficients:
-    rad = lubrication_coefficients(hr, problem.xr, problem.yr, problem.lub)
-    ang = lubrication_coefficients(ha, problem.xa, problem.ya, problem.lub)
-    floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
-    return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
+    # both face sets in one evaluation, with the face kinematics the problem computed once
+    c = lubrication_coefficients(np.stack([hr, ha]), problem._xf, problem._yf, problem.lub, problem._vf)
+    return FaceCoefficients(tuple(a[0] for a in c[:5]), tuple(a[1] for a in c[:5]), int(np.count_nonzero(c[5])), c[5].size)
 
 
 def _slurry_pressure(problem, phi):
@@ -467,6 +466,13 @@ def coupled_state(problem, u):
         prev = size if scale == 1.0 else None
     else:
         raise ValueError(f"the coupled film and pad deflection did not converge in {_MAX_INNER} Newton steps")
+    return _converged_state(problem, ev, lin)
+
+
+def _converged_state(problem, ev: _Evaluation, lin: CoupledLinearisation) -> PressureState:
+    """The :class:`PressureState` of a converged evaluation, remembered for the deformed film and warm starts."""
+    u, phi, w = ev.u, ev.phi, ev.w
+    mem = _memory(problem)
     res = problem._residual(ev.p_total)
     mem.remember(u, phi, w)
     mem.lin = lin
@@ -497,30 +503,43 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
         lin = _linearise(problem, ev, ops)  # the state converged on another position's factorisation
         st.coupling = (lin, ev)
         _memory(problem).lin = lin
-    s_rad, s_ang = lin.face_slopes
-    J = np.empty((3, 3))
-    dphi_du = np.empty((st.phi.size, 3))
-    dw_du = np.empty((st.phi.size, 3))
-    points = ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya))
-    base = [_rigid_film(problem, st.u, x, y) for x, y in points]
-    for k in range(3):
-        du = np.zeros(3)
-        du[k] = rel_step * problem.u_scale[k]
-        u = st.u + du
-        dh, dhr, dha = (((_rigid_film(problem, u, x, y) - b) / du[k]).ravel() for (x, y), b in zip(points, base))
-        dR = ops.div_radial @ (s_rad * dhr) + ops.div_angular @ (s_ang * dha)
-        dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)
-        dphi, dw = lin.solve(dR, dG)
-        problem.back_substitutions += 1
-        dP = lin.P_phi * dphi + lin.P_h * (dh + dw)
-        J[:, k] = problem.carrier.residual_change(problem, dP.reshape(st.phi.shape))
-        dphi_du[:, k], dw_du[:, k] = dphi, dw
+    J, dphi_du, dw_du = _position_columns(problem, lin, st.u, ops, rel_step)
     shape = st.phi.shape
     _memory(problem).tangent = (
         st.u.copy(), st.phi.copy(), st.deflection.copy(),
         dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
     )
     return J
+
+
+def _position_columns(problem, lin: CoupledLinearisation, u, ops, rel_step: float = 1e-6):
+    """(J, dphi/du, dw/du) of the coupled system linearised in ``lin``, at position u.
+
+    For each component of u the Reynolds residual and the local balance are differentiated at
+    fixed (phi, w) (the face-flux slopes of ``lin`` times d(rigid film)/du on the faces: a
+    finite difference of the geometry alone) and the coupled system is solved with ``lin``'s
+    factorisation: three back-substitutions. J (3 x 3) is d(balance residuals)/du along the
+    solution; dphi/du and dw/du are (cells, 3).
+    """
+    s_rad, s_ang = lin.face_slopes
+    n = lin.P_phi.size
+    J = np.empty((3, 3))
+    dphi_du = np.empty((n, 3))
+    dw_du = np.empty((n, 3))
+    points = ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya))
+    base = [_rigid_film(problem, u, x, y) for x, y in points]
+    for k in range(3):
+        du = np.zeros(3)
+        du[k] = rel_step * problem.u_scale[k]
+        dh, dhr, dha = (((_rigid_film(problem, u + du, x, y) - b) / du[k]).ravel() for (x, y), b in zip(points, base))
+        dR = ops.div_radial @ (s_rad * dhr) + ops.div_angular @ (s_ang * dha)
+        dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)
+        dphi, dw = lin.solve(dR, dG)
+        problem.back_substitutions += 1
+        dP = lin.P_phi * dphi + lin.P_h * (dh + dw)
+        J[:, k] = problem.carrier.residual_change(problem, dP.reshape(base[0].shape))
+        dphi_du[:, k], dw_du[:, k] = dphi, dw
+    return J, dphi_du, dw_du
 
 
 def _same_set(a, b) -> bool:
@@ -546,17 +565,15 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         )
     # contact only, the local balance k w = p_c(h) with h = h_rigid + w inverts explicitly:
     # h_rigid = h - p_c(h) / k is increasing in h, so a table of it gives h from h_rigid
-    cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
-    h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
-    h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
-    hr_tab = h_tab - problem.contact(h_tab)[0] / problem.foundation.stiffness
+    h_max, h_tab, hr_tab, pc_tab = _contact_only_table(problem)
 
     def film(h0):
         hr = h0 + shape
         return np.where(hr >= h_max, hr, np.interp(hr, hr_tab, h_tab))
 
     def excess(h0):
-        return problem.grid.integrate(problem.contact(film(h0))[0]) / problem.load_scale - 1.0
+        # the contact pressure of the table's balance at each cell's rigid film: no kernel call
+        return problem.grid.integrate(np.interp(h0 + shape, hr_tab, pc_tab)) / problem.load_scale - 1.0
 
     h_hi = -shape.min() + h_max  # no contact even undeflected
     h_lo = -shape.max() + hr_tab[0]  # the film closes somewhere below this
@@ -564,9 +581,32 @@ def compliant_contact_only_start(problem) -> np.ndarray:
         raise EquilibriumError("no film balances the contact load on the compliant pad")
     h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * sigma, rtol=1e-12)
     u = np.array([h0, 0.0, 0.0])
-    w = local_deflection(problem, h0 + shape, np.zeros_like(shape), film(h0) - (h0 + shape))
-    _memory(problem).last = (u, np.zeros_like(shape), w)
+    # the deflection of the table (the coupled solve's start balances it to round-off: :func:`_start`)
+    _memory(problem).last = (u, np.zeros_like(shape), film(h0) - (h0 + shape))
     return u
+
+
+_CONTACT_ONLY_TABLES: dict = {}
+
+
+def _contact_only_table(problem) -> tuple:
+    """(h_max, h, h_rigid, p_c) of the contact-only local balance: the film h (m) on 4001 points
+    up to h_max, where the contact ends, the rigid film h - p_c(h) / k (m) it stands on and the
+    contact pressure p_c(h) (Pa); built once per pad surface, contact model, offset and bed
+    stiffness (a cold start on every point of a sweep would otherwise build it again)."""
+    pad, sigma = problem.pad, problem.sigma
+    key = (pad, problem.variant, problem.separation_offset, problem.foundation.stiffness, sigma)
+    table = _CONTACT_ONLY_TABLES.get(key)
+    if table is None:
+        cutoff = pad.height_cutoff if np.isfinite(pad.height_cutoff) else 12.0
+        h_max = problem.separation_offset + cutoff * pad.sigma_s  # no contact beyond
+        h_tab = np.linspace(1e-3 * sigma, h_max, 4001)
+        pc_tab = problem.contact(h_tab)[0]
+        hr_tab = h_tab - pc_tab / problem.foundation.stiffness
+        if len(_CONTACT_ONLY_TABLES) >= 64:
+            _CONTACT_ONLY_TABLES.clear()
+        table = _CONTACT_ONLY_TABLES[key] = (h_max, h_tab, hr_tab, pc_tab)
+    return table
 
 
 def deformed_film(problem, u, x, y) -> np.ndarray:
@@ -579,4 +619,21 @@ def deformed_film(problem, u, x, y) -> np.ndarray:
     w = _memory(problem).deflections.get(u.tobytes())
     if w is None:
         w = problem.state(u).deflection
-    return _rigid_film(problem, u, x, y) + problem.grid.interpolate(w, x, y)
+    x, y = np.broadcast_arrays(np.asarray(x, dtype=float), np.asarray(y, dtype=float))
+    return _rigid_film(problem, u, x, y) + (_interpolation(problem.grid, x, y) @ w.ravel()).reshape(x.shape)
+
+
+_INTERPOLATIONS: dict = {}
+
+
+def _interpolation(grid, x, y):
+    """:meth:`cmpsim.grid.PolarGrid.interpolation_matrix` of ``grid`` at the points (x, y), built
+    once per grid and points (the outputs ask for the film at the rim and the centre of every
+    solve)."""
+    key = (grid, x.shape, x.tobytes(), y.tobytes())
+    m = _INTERPOLATIONS.get(key)
+    if m is None:
+        if len(_INTERPOLATIONS) >= 32:
+            _INTERPOLATIONS.clear()
+        m = _INTERPOLATIONS[key] = grid.interpolation_matrix(x.ravel(), y.ravel())
+    return m

@@ -157,6 +157,9 @@ def _from_start(problem: WaferProblem, start, warm: bool, tol: float, max_iter: 
         problem._reference = _last_factors().get(problem.grid)
     if warm:
         problem.pad_model.resume_chain(problem)
+    joint = problem.pad_model.joint_newton(problem, u, tol, max_iter, max_step)
+    if joint is not None:
+        return joint
     try:
         st = problem.state(u)
     except ValueError:

@@ -121,6 +121,9 @@ class SlurryModel(Protocol):
 
     def cavitated(self, phi): ...
 
+    def unknown_scale(self, applied_pressure: float) -> float:
+        """The scale of the unknown for convergence tests (1 for ln(p/p0), Pa for p)."""
+
     def residual(self, grid, coeffs, phi): ...
 
     def flux_change(self, grid, coeffs, dcoeffs, phi): ...

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .. import compliance
+from .. import compliance, jointnewton
 from ..padstack import LayeredFoundation, PadLayer, WinklerFoundation
 from ..reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients
 from ..state import EquilibriumError, PressureState
@@ -194,6 +194,12 @@ class RigidPad:
             h0 = brentq(excess, h_lo, h_hi, xtol=1e-6 * problem.sigma, rtol=1e-12)
         return np.array([h0, 0.0, 0.0])
 
+    # ------------------------------------------------------------------ joint Newton
+    def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
+        """The equilibrium by one Newton iteration on the position and the pad's own unknowns, or
+        None: the rigid pad has none, the driver's Newton on u alone solves it."""
+        return None
+
     # ------------------------------------------------------------------ chains of points
     def resume_chain(self, problem) -> None:
         """Nothing to carry: the rigid solve refines against the chain's last LU (:mod:`cmpsim.equilibrium`)."""
@@ -257,6 +263,9 @@ class WinklerPad(RigidPad):
     """
 
     name = "winkler"
+    #: Solve the film, the deflection and the position in one Newton iteration (the local bed's
+    #: coupled matrix is factorised; the layered pad's is solved by GMRES, nested).
+    joint = True
     chord_steps = False
     adaptive_trust = False
     coarse_starts = False
@@ -297,6 +306,13 @@ class WinklerPad(RigidPad):
     def contact_only_start(self, problem) -> np.ndarray:
         return compliance.compliant_contact_only_start(problem)
 
+    def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
+        """(u, state, steps, history) of Newton on (slurry pressure, deflection, position) together
+        (:func:`cmpsim.jointnewton.joint_equilibrium`), or None if it does not converge."""
+        if not self.joint:
+            return None
+        return jointnewton.joint_equilibrium(problem, u, tol=tol, max_iter=max_iter, max_step=max_step)
+
     def resume_chain(self, problem) -> None:
         compliance.resume_chain(problem)
 
@@ -312,6 +328,7 @@ class LayerPad(WinklerPad):
     """
 
     name = "layer"
+    joint = False
     foundation_type = LayeredFoundation
 
     @classmethod

@@ -300,6 +300,10 @@ class GranularSlurry:
     def cavitated(self, phi):
         return None
 
+    def unknown_scale(self, applied_pressure: float) -> float:
+        """The scale on which a change of the unknown counts (convergence tests): 1, ln(p/p0) is dimensionless."""
+        return 1.0
+
     def residual(self, grid, coeffs, phi):
         """(R, dR/dphi) of the discrete slurry problem at the unknown phi (the coupled solve of a compliant pad)."""
         return self.cavitation.residual(grid, coeffs, phi)
@@ -368,6 +372,10 @@ class NewtonianSlurry(GranularSlurry):
 
     def cavitated(self, phi):
         return self.cavitation.cavitated(phi)
+
+    def unknown_scale(self, applied_pressure: float) -> float:
+        """The scale on which a change of the unknown counts (convergence tests): the applied pressure, Pa."""
+        return applied_pressure
 
     def edge_pressure(self, ambient_pressure: float) -> float:
         """Ambient: 0 Pa gauge."""
