@@ -93,18 +93,18 @@ CASES = {
 }
 
 
-def extract_baseline(tmp: Path) -> Path:
-    """``src/cmpsim`` of b10a4ba into ``tmp``; returns the directory to put on PYTHONPATH."""
-    archive = subprocess.run(["git", "-C", str(REPO), "archive", BASELINE_COMMIT, "src/cmpsim"], check=True, capture_output=True).stdout
+def extract_baseline(tmp: Path, commit: str = BASELINE_COMMIT) -> Path:
+    """``src/cmpsim`` of ``commit`` (b10a4ba) into ``tmp``; returns the directory to put on PYTHONPATH."""
+    archive = subprocess.run(["git", "-C", str(REPO), "archive", commit, "src/cmpsim"], check=True, capture_output=True).stdout
     subprocess.run(["tar", "-x", "-C", str(tmp)], input=archive, check=True)
     return tmp / "src"
 
 
-def measure(pythonpath: str | None, repeat: int, cases: dict) -> dict:
+def measure(pythonpath: str | None, repeat: int, cases: dict, child: str = CHILD) -> dict:
     env = dict(os.environ)
     if pythonpath:
         env["PYTHONPATH"] = pythonpath  # ahead of this checkout's editable install
-    proc = subprocess.run([sys.executable, "-c", CHILD, str(repeat), json.dumps(cases)], env=env, capture_output=True, text=True)
+    proc = subprocess.run([sys.executable, "-c", child, str(repeat), json.dumps(cases)], env=env, capture_output=True, text=True)
     if proc.returncode != 0:
         raise SystemExit(f"measurement failed:\n{proc.stderr}")
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("RESULT "))

@@ -6,6 +6,7 @@ import pytest
 import cmpsim
 from cmpsim.config import Config
 from cmpsim.grid import PolarGrid
+from cmpsim.padgrid import layer_deflection, layer_operator
 from cmpsim.setup import pad_foundation
 
 PSI = 6894.757293168361
@@ -25,10 +26,10 @@ def test_the_rings_pad_deflection_agrees_with_the_fft_operator_of_the_pad(stack)
     g = PolarGrid(outer, 120, 128)
     rr = g.r * np.ones_like(g.theta)
     p = np.where((rr > inner) & (rr < outer), 5 * PSI, 0.0)
-    fft = np.interp(r, g.r[:, 0], stack.operator(g).apply(p).reshape(rr.shape).mean(axis=1))
+    fft = np.interp(r, g.r[:, 0], layer_operator(stack, g).apply(p).reshape(rr.shape).mean(axis=1))
     scale = stack.annulus_deflection(np.array([radius]), inner, outer, 5 * PSI)[0]  # at the wafer edge, ~7 um
     assert scale > 1e-6
-    assert np.max(np.abs(w - fft)) < 0.05 * scale  # the FFT resolves the ring's edges to 0.25 mm only
+    assert np.max(np.abs(w - fft)) < 0.05 * scale  # 3.5 %: the cells straddling the ring's edges (0.8 % on 240 rings)
 
 
 def test_far_from_the_ring_the_pad_does_not_move_and_a_wide_disk_sinks_it_like_a_winkler_bed(stack):
@@ -55,4 +56,4 @@ def test_raising_the_ring_pressure_lowers_the_edge_rate_monotonically():
     assert all(b < a for a, b in zip(edge, edge[1:])), edge
     assert edge[0] > 1.3 and edge[-1] < 0.9  # the fast edge band of the layered pad, then a slow one
     # docs/model.md, section 13f: the non-uniformity has a minimum near 4 psi
-    assert wiwnu == pytest.approx([0.084, 0.079, 0.013, 0.039], abs=0.002)
+    assert wiwnu == pytest.approx([0.084, 0.088, 0.0125, 0.038], abs=0.002)

@@ -10,9 +10,9 @@ five-fold from the centre to the edge. `pad_compliance` adds the bulk of the pad
   on a Suba IV-like subpad (1.27 mm, 2.3 MPa), k ≈ 1.8 GPa/m: the wafer sinks about 15 µm into
   the pad, three times its dome height, and the pad takes up most of the dome.
 - `"layer"`: the same stack with lateral coupling: the top pad bends as a plate over the subpad,
-  an elastic layer bonded to the platen (solved by FFT). Far from the edge it deflects like the
-  bed; near the edge the unloaded pad outside holds the pad surface up, which concentrates the
-  pressure over a few millimetres.
+  an elastic layer bonded to the platen (its kernel integrated over each grid cell). Far from
+  the edge it deflects like the bed; near the edge the unloaded pad outside holds the pad
+  surface up, which concentrates the pressure over a few millimetres.
 
 This script solves the base case (3-inch wafer, 4 psi, 60 rpm) with the three pads, then varies
 the subpad's thickness (both compliant models) and modulus (Winkler).

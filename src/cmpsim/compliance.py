@@ -34,10 +34,11 @@ differentiation, three back-substitutions), and so does a tangent predictor that
 next solve close to its solution.
 
 With lateral coupling (:class:`LayeredFoundation`, ``pad_compliance = "layer"``) the deflection is
-w = C p with a nonlocal compliance C (the top pad as a plate on an elastic subpad layer, applied
-by FFT on a Cartesian auxiliary grid); G becomes k (w - C p), and the same Newton system is
-solved by GMRES preconditioned by the Winkler factorisation of the same stack, whose stiffness k
-is the long-wavelength limit of C.
+w = C p with a nonlocal compliance C (the top pad as a plate on an elastic subpad layer, its
+kernel integrated exactly over the polar cells: :mod:`cmpsim.padgrid`); G becomes k (w - C p),
+and the Newton system is solved by GMRES preconditioned by the factorisation of the same system
+with a sparse (Laplacian) stand-in for the pad's stiffness, exact for the long waves where C
+tends to the bed's 1/k (:func:`cmpsim.padgrid.layer_newton_matrix`).
 """
 
 from __future__ import annotations
@@ -54,6 +55,7 @@ from .grid import face_operators as _face_operators
 from .padstack import *  # noqa: F403
 from .padstack import __all__ as _PADSTACK
 from .coupling import coupled_newton_matrices
+from .padgrid import layer_deflection, layer_newton_matrix, pad_laplacian
 from .krylov import gmres as _gmres  # looked up at call time: benchmarks/bench_house.py swaps it
 from .reynolds import FaceCoefficients, factorize, lubrication_coefficients
 from .state import EquilibriumError, PressureState
@@ -236,7 +238,7 @@ def _evaluate(problem, u, phi, w, ops, rigid=None) -> _Evaluation:
     if f.local:
         G = (k * w - p_fluid - contact[0]).ravel()
     else:  # k (w - C p): the same scale as on the Winkler bed, to which it reduces when C = 1/k
-        G = k * (w.ravel() - f.deflection(p_fluid + contact[0], problem.grid).ravel())
+        G = k * (w.ravel() - layer_deflection(f, p_fluid + contact[0], problem.grid).ravel())
     return _Evaluation(u, phi, w, h, face_h, coeffs, A, R, G, p_abs, p_fluid, contact)
 
 
@@ -255,7 +257,8 @@ def _load_derivative_h(problem, phi, h):
 class CoupledLinearisation:
     """Newton matrix of the coupled (phi, w) system with w eliminated, factorised once.
 
-    ``factor`` solves S = A + R_w diag(P_phi / K); K = k - P_h. All vectors flat (cell order).
+    ``factor`` solves S = A + R_w diag(P_phi / K); K = k - P_h (Winkler bed), or, on a layered pad,
+    the 2N (dphi, v) matrix of :func:`cmpsim.padgrid.layer_newton_matrix`. All vectors flat (cell order).
     """
 
     factor: object
@@ -265,10 +268,10 @@ class CoupledLinearisation:
     K: np.ndarray
     u: np.ndarray  # position where it was built
     drift: float = 0.0  # how far the iterate moved since (max |dw| / sigma, |dphi|), summed
-    # ---- layered pad (nonlocal compliance): the system is solved by GMRES, preconditioned by
-    # the Winkler system above (the same stack's long-wave stiffness k)
+    # ---- layered pad (nonlocal compliance): the system is solved by GMRES, preconditioned by the
+    # factorisation above of the (dphi, v) system with the sparse stand-in stiffness (cmpsim.padgrid)
     A: sp.csr_matrix | None = None
-    layer: object = None  # (k, deflection: callable pressure -> deflection, sigma) or None
+    layer: object = None  # (k, deflection: callable pressure -> deflection, sigma, g, c_loc) or None
     krylov_iterations: int = 0
     # d(face flux)/d(face film) on the radial and angular faces (flat): R_w, and dR/du in the Jacobian
     face_slopes: tuple | None = None
@@ -280,7 +283,8 @@ class CoupledLinearisation:
 
         Winkler bed: J = [A R_w; -P_phi K], solved exactly with the factorisation. Layered pad:
         the second row is k (dw - C (P_phi dphi + P_h dw)) with the nonlocal C; GMRES on the
-        system left-preconditioned by the Winkler one.
+        system left-preconditioned by the same system with a sparse stand-in for the pad's
+        stiffness (:mod:`cmpsim.padgrid`).
         """
         if self.layer is None:
             return self._solve_local(R, G)
@@ -291,6 +295,24 @@ class CoupledLinearisation:
         dw = (self.P_phi * dphi - G) / self.K
         return dphi, dw
 
+    def approximate_step(self, R, G):
+        """The Newton step of the factorised system: exact on a Winkler bed, the preconditioner's on a layered pad."""
+        if self.layer is None:
+            return self._solve_local(R, G)
+        dphi, dw = self._precondition(-R, -G)
+        return dphi, dw
+
+    def _precondition(self, r1, r2):
+        """(dphi, dw) solving the sparse stand-in J_p (dphi, dw) = (r1, r2) of the layered system
+        (pad stiffness k0 - b L; :func:`cmpsim.padgrid.layer_newton_matrix`)."""
+        k, _, _, g, c_loc = self.layer
+        n = r1.size
+        z = r2 / k
+        x = np.asarray(self.factor.solve(np.concatenate([r1 - self.R_w @ (g * z), g * self.P_h * z])))
+        dphi, v = x[:n], x[n:]
+        p = g * (self.P_phi * dphi + self.P_h * (v + z))
+        return dphi, v + c_loc * p + z
+
     def deflection(self, pressure):
         """C p (m) for a flat cell field (Pa): p / k on a Winkler bed."""
         if self.layer is None:
@@ -298,11 +320,11 @@ class CoupledLinearisation:
         return self.layer[1](pressure)
 
     def _solve_layer(self, R, G):
-        k, deflect, sigma = self.layer
+        k, deflect, sigma = self.layer[:3]
         n = R.size
 
-        def precondition(r1, r2):  # the Winkler system: J_W^-1 (r1, r2)
-            a, b = self._solve_local(-r1, -r2)
+        def precondition(r1, r2):
+            a, b = self._precondition(r1, r2)
             return np.concatenate([a, b / sigma])
 
         def matvec(x):
@@ -312,7 +334,7 @@ class CoupledLinearisation:
             r2 = k * (dw - deflect(self.P_phi * dphi + self.P_h * dw))
             return precondition(r1, r2)
 
-        rhs = precondition(-R, -G)  # the Winkler step
+        rhs = precondition(-R, -G)  # the preconditioner's step
         if not np.any(rhs):
             return np.zeros(n), np.zeros(n)
         # an inexact Newton step: 1e-6 of the step is far below what the outer iterations need
@@ -337,16 +359,17 @@ def _linearise(problem, ev: _Evaluation, ops) -> CoupledLinearisation:
     P_h = _load_derivative_h(problem, ev.phi, ev.h).ravel()
     K = k - P_h
     R_w, S = coupled_newton_matrices(grid, ev.matrix, s_rad, s_ang, P_phi / K)
+    f = problem.foundation
+    if not f.local:  # the layered pad: factorise the preconditioner's sparse system instead
+        S, g = layer_newton_matrix(ev.matrix, R_w, P_phi, P_h, f.local_compliance, f.stiffness_quadratic(), pad_laplacian(grid, f.coupling_length))
     factor = (problem.solver or factorize)(S)
     problem.factorizations += 1
     lin = CoupledLinearisation(factor, R_w, P_phi, P_h, K, ev.u.copy())
     lin.face_slopes = (s_rad, s_ang)
     lin.cavitated = problem.slurry.cavitated(ev.phi)
-    f = problem.foundation
     if not f.local:
-        grid = problem.grid
         lin.A = ev.matrix
-        lin.layer = (k, lambda p: f.deflection(p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma)
+        lin.layer = (k, lambda p: layer_deflection(f, p.reshape(grid.n_r, grid.n_theta), grid).ravel(), problem.sigma, g, f.local_compliance)
     return lin
 
 
@@ -410,8 +433,8 @@ def coupled_state(problem, u):
     for _ in range(_MAX_INNER):
         dphi = dw = None
         if lin is not None:  # chord step with the factorisation at hand
-            # (on a layered pad, judge by the cheap Winkler step before paying for GMRES)
-            dphi, dw = lin.solve(ev.R, ev.G) if lin.layer is None else lin._solve_local(ev.R, ev.G)
+            # (on a layered pad, judge by the preconditioner's cheap step before paying for GMRES)
+            dphi, dw = lin.approximate_step(ev.R, ev.G)
             size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
             if size > (_REUSE_FIRST if prev is None else _CONTRACTION * prev):
                 dphi = None

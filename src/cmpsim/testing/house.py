@@ -20,8 +20,8 @@ __all__ = ["FLOORS", "UTILITIES", "MODEL_OPTIONS", "source_modules", "imports_of
 
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity; the hand-written GMRES", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "abrasion", "kinetics", "materials", "padstack", "uniformity", "krylov")),
-    ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems and the pad-coupled Newton matrix; the wafer as a plate", ("grid", "sparse", "reynolds", "coupling", "cavitation", "plate")),
+    ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity; the hand-written GMRES", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "abrasion", "kinetics", "materials", "padstack", "padinfluence", "uniformity", "krylov")),
+    ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems and the pad-coupled Newton matrix; the layered pad on the grid; the wafer as a plate", ("grid", "sparse", "reynolds", "coupling", "padgrid", "cavitation", "plate")),
     ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection, and with the position in one Newton iteration; its linear response to the carrier's film; load balance and Newton on the wafer position", ("state", "compliance", "jointnewton", "sensitivity", "models", "wafer", "loadbalance", "equilibrium", "membrane")),
     ("inputs", "the registries: inputs with units, ranges and sources (one entry and its range check; inputs another input sets); outputs with units and meanings", ("units", "param", "config", "derived", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
