@@ -486,21 +486,6 @@ def _converged_state(problem, ev: _Evaluation, lin: CoupledLinearisation) -> Pre
     )
 
 
-def _state_linearisation(problem, st) -> CoupledLinearisation:
-    """The factorisation to differentiate the solved state ``st`` with: its own if it was built
-    close enough to it (see _JACOBIAN_MOVE, _JACOBIAN_DRIFT) on the same cavitated set, else a
-    fresh one at the state (then kept as the state's and the problem's)."""
-    lin, ev = st.coupling
-    moved = np.max(np.abs(st.u - lin.u) / problem.u_scale) if lin is not None else np.inf
-    # a factorisation taken on another cavitated set linearises the other side of p_cav
-    other_set = lin is not None and not _same_set(lin.cavitated, st.cavitated)
-    if lin is None or moved > _JACOBIAN_MOVE or lin.drift > _JACOBIAN_DRIFT or other_set:
-        lin = _linearise(problem, ev, _face_operators(problem.grid))  # the state converged on another position's factorisation
-        st.coupling = (lin, ev)
-        _memory(problem).lin = lin
-    return lin
-
-
 def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
     """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
 
@@ -510,8 +495,16 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
     so dR/du is the face-flux slopes of the linearisation times d(rigid film)/du on the faces
     (a finite difference of the geometry alone: no coefficient evaluation, no assembly).
     """
-    lin = _state_linearisation(problem, st)
-    J, dphi_du, dw_du = _position_columns(problem, lin, st.u, _face_operators(problem.grid), rel_step)
+    ops = _face_operators(problem.grid)
+    lin, ev = st.coupling
+    moved = np.max(np.abs(st.u - lin.u) / problem.u_scale) if lin is not None else np.inf
+    # a factorisation taken on another cavitated set linearises the other side of p_cav
+    other_set = lin is not None and not _same_set(lin.cavitated, st.cavitated)
+    if lin is None or moved > _JACOBIAN_MOVE or lin.drift > _JACOBIAN_DRIFT or other_set:
+        lin = _linearise(problem, ev, ops)  # the state converged on another position's factorisation
+        st.coupling = (lin, ev)
+        _memory(problem).lin = lin
+    J, dphi_du, dw_du = _position_columns(problem, lin, st.u, ops, rel_step)
     shape = st.phi.shape
     _memory(problem).tangent = (
         st.u.copy(), st.phi.copy(), st.deflection.copy(),
@@ -521,11 +514,8 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
 
 
 def film_change(problem, lin: CoupledLinearisation, dh, dhr, dha, ops):
-    """(dP, dphi, dw): the linear change of the total pressure (Pa), of the slurry unknown and of the
-    pad deflection (m) of the system linearised in ``lin`` under a change of the carrier's film at
-    fixed u, ``dh``, ``dhr``, ``dha`` (m, flat) at the cell centres, radial and angular faces
-    (dR: the face-flux slopes times the face films; dG = -P_h dh or its nonlocal image): one
-    back-substitution."""
+    """(dP, dphi, dw): the linear change of total pressure (Pa), slurry unknown and pad deflection (m) under a
+    change of the carrier's film at fixed u (``dh``, ``dhr``, ``dha``, m, flat: centres, faces), one back-substitution."""
     s_rad, s_ang = lin.face_slopes
     dR = ops.div_radial @ (s_rad * dhr) + ops.div_angular @ (s_ang * dha)
     dG = -lin.P_h * dh if lin.layer is None else -lin.layer[0] * lin.deflection(lin.P_h * dh)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compliance import _face_operators, _memory, _rigid_film, _state_linearisation, coupled_jacobian, film_change
+from .compliance import _face_operators, _memory, _rigid_film, coupled_jacobian, film_change
 
 __all__ = ["film_response", "expect_film_change", "coupled_sensitivity"]
 
@@ -29,11 +29,11 @@ def film_response(problem, st, dh, dhr, dha):
 
     ``dh``, ``dhr``, ``dha`` (m, flat): the change of the film at the cell centres and on the
     radial and angular faces. Returns (dP, dphi, dw): the change of the total pressure (Pa, flat),
-    of the slurry unknown and of the pad deflection (m), through the state's factorisation (a fresh
-    one if the state converged on another position's).
+    of the slurry unknown and of the pad deflection (m), through the factorisation of the state's
+    Jacobian: take :func:`coupled_sensitivity` (or the Jacobian) at ``st`` first, which refactorises
+    a state that converged on another position's factorisation.
     """
-    lin = _state_linearisation(problem, st)
-    return film_change(problem, lin, dh, dhr, dha, _face_operators(problem.grid))
+    return film_change(problem, st.coupling[0], dh, dhr, dha, _face_operators(problem.grid))
 
 
 def expect_film_change(problem, st, dh, dhr, dha) -> np.ndarray:
