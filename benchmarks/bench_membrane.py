@@ -1,10 +1,10 @@
-"""The membrane carrier's solve against the Anderson fixed point it replaced (main at e0063b3), in one run.
+"""The membrane carrier's solve against the Anderson fixed point it replaced (main at 0042658), in one run.
 
 Run: python benchmarks/bench_membrane.py [--repeat 3] [--rounds 2] [--layered] [--json FILE]
 (about 3 min on a shared 2-core VM; ``--layered`` adds a 300 mm head on the layered pad, a few
 minutes more for the baseline).
 
-The baseline's ``src/cmpsim`` is taken from this repository's history (``git archive e0063b3``;
+The baseline's ``src/cmpsim`` is taken from this repository's history (``git archive 0042658``;
 ``--baseline REF`` for another) into a temporary folder that a child process of the same
 interpreter puts first on its ``PYTHONPATH``: the same numpy, scipy and SuperLU, only cmpsim's
 code differs. The two versions take turns for ``--rounds`` rounds and each case keeps its best
@@ -40,7 +40,7 @@ from pathlib import Path
 
 from bench_versus_0_1 import max_rel_diff  # the largest relative difference of two dicts of scalars
 
-BASELINE = "e0063b3"
+BASELINE = "0042658"
 REPO = Path(__file__).resolve().parents[1]
 SCALARS = ("film_thickness_center", "attack_angle", "removal_rate_mean", "within_wafer_nonuniformity", "fluid_load_fraction")
 BIG = {"wafer_diameter": 0.3, "centre_distance": 0.2, "carrier": "membrane"}
