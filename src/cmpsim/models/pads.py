@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .. import compliance, jointnewton, sensitivity
+from .. import compliance, compliantfilm, jointnewton, sensitivity
 from ..padstack import LayeredFoundation, PadLayer, WinklerFoundation
 from ..reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients
 from ..state import EquilibriumError, PressureState
@@ -288,7 +288,7 @@ class WinklerPad(RigidPad):
 
     def film(self, problem, u, x, y) -> np.ndarray:
         """Film at points (x, y): the carrier's film plus the pad deflection of the coupled solution at u, m."""
-        return compliance.deformed_film(problem, u, x, y)
+        return compliantfilm.deformed_film(problem, u, x, y)
 
     def face_coefficients(self, problem, u) -> FaceCoefficients:
         """Reynolds coefficients on the faces of the deformed film at position u."""
@@ -319,7 +319,7 @@ class WinklerPad(RigidPad):
         return sensitivity.expect_film_change(problem, st, dh, dhr, dha)
 
     def contact_only_start(self, problem) -> np.ndarray:
-        return compliance.compliant_contact_only_start(problem)
+        return compliantfilm.compliant_contact_only_start(problem)
 
     def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
         """(u, state, steps, history) of Newton on (slurry pressure, deflection, position) together
