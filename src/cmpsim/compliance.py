@@ -403,7 +403,13 @@ def local_deflection(problem, h_rigid, phi, w0=None, tol: float = 1e-12, max_ite
 
 # ---------------------------------------------------------------------------------- coupled state
 def _start(problem, u, mem: _Memory):
-    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally."""
+    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally.
+
+    On a layered pad the last state's deflection keeps its nonlocal shape and moves by the change
+    of the local balance k w = P between the two positions (re-balancing it locally replaced
+    that shape by the Winkler bed's, whose rim deflection is about twice the layered pad's, and
+    Newton from there diverged on the coarse grid).
+    """
     if mem.tangent is not None:
         ut, phi_t, w_t, dphi, dw = mem.tangent
         du = u - ut
@@ -413,7 +419,11 @@ def _start(problem, u, mem: _Memory):
     phi = mem.last[1] if mem.last is not None else np.zeros(shape)
     w0 = mem.last[2] if mem.last is not None else None
     h_rigid = _rigid_film(problem, u, problem.xc, problem.yc)
-    return phi, local_deflection(problem, h_rigid, phi, w0)
+    if w0 is None or problem.foundation.local:
+        return phi, local_deflection(problem, h_rigid, phi, w0)
+    # the last deflection moved by the local balance's change between the two positions
+    h_last = _rigid_film(problem, mem.last[0], problem.xc, problem.yc)
+    return phi, w0 + local_deflection(problem, h_rigid, phi, w0) - local_deflection(problem, h_last, phi, w0)
 
 
 def coupled_state(problem, u):
