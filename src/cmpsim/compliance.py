@@ -444,16 +444,16 @@ def coupled_state(problem, u):
         if lin is not None:  # chord step with the factorisation at hand
             # (on a layered pad, judge by the preconditioner's cheap step before paying for GMRES)
             dphi, dw = lin.approximate_step(ev.R, ev.G)
-            size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+            size = _step_size(problem, dphi, dw)
             if size > (_REUSE_FIRST if prev is None else _CONTRACTION * prev):
                 dphi = None
             elif lin.layer is not None:
                 dphi, dw = lin.solve(ev.R, ev.G)
-                size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+                size = _step_size(problem, dphi, dw)
         if dphi is None:  # Newton step: factorise at the current iterate
             lin = _linearise(problem, ev, ops)
             dphi, dw = lin.solve(ev.R, ev.G)
-            size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+            size = _step_size(problem, dphi, dw)
         dphi = dphi.reshape(phi.shape)
         dw = dw.reshape(w.shape)
         # keep the film positive and the step inside a trust region
@@ -477,6 +477,14 @@ def coupled_state(problem, u):
     else:
         raise ValueError(f"the coupled film and pad deflection did not converge in {_MAX_INNER} Newton steps")
     return _converged_state(problem, ev, lin)
+
+
+def _step_size(problem, dphi, dw) -> float:
+    """Size of a step of (phi, w): the largest change of w in sigma and of phi in the slurry's
+    ``unknown_scale`` (the applied pressure for a Newtonian gauge pressure in Pa, 1 for ln(p/p0)),
+    as the joint Newton measures it (:func:`cmpsim.jointnewton._joint_size`)."""
+    phi_scale = problem.slurry.unknown_scale(problem.applied_pressure)
+    return max(float(np.max(np.abs(dw))) / problem.sigma, float(np.max(np.abs(dphi))) / phi_scale)
 
 
 def _converged_state(problem, ev: _Evaluation, lin: CoupledLinearisation) -> PressureState:
