@@ -403,13 +403,8 @@ def local_deflection(problem, h_rigid, phi, w0=None, tol: float = 1e-12, max_ite
 
 # ---------------------------------------------------------------------------------- coupled state
 def _start(problem, u, mem: _Memory):
-    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally.
-
-    On a layered pad the last state's deflection keeps its nonlocal shape and moves by the change
-    of the local balance k w = P between the two positions (re-balancing it locally replaced
-    that shape by the Winkler bed's, whose rim deflection is about twice the layered pad's, and
-    Newton from there diverged on the coarse grid).
-    """
+    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally (on a
+    layered pad: moved by the local balance's change, keeping its nonlocal shape; docs/limitations.md)."""
     if mem.tangent is not None:
         ut, phi_t, w_t, dphi, dw = mem.tangent
         du = u - ut
@@ -421,7 +416,6 @@ def _start(problem, u, mem: _Memory):
     h_rigid = _rigid_film(problem, u, problem.xc, problem.yc)
     if w0 is None or problem.foundation.local:
         return phi, local_deflection(problem, h_rigid, phi, w0)
-    # the last deflection moved by the local balance's change between the two positions
     h_last = _rigid_film(problem, mem.last[0], problem.xc, problem.yc)
     return phi, w0 + local_deflection(problem, h_rigid, phi, w0) - local_deflection(problem, h_last, phi, w0)
 
@@ -480,9 +474,7 @@ def coupled_state(problem, u):
 
 
 def _step_size(problem, dphi, dw) -> float:
-    """Size of a step of (phi, w): the largest change of w in sigma and of phi in the slurry's
-    ``unknown_scale`` (the applied pressure for a Newtonian gauge pressure in Pa, 1 for ln(p/p0)),
-    as the joint Newton measures it (:func:`cmpsim.jointnewton._joint_size`)."""
+    """Largest change of w (sigma) and of phi (slurry's ``unknown_scale``), as the joint Newton's."""
     phi_scale = problem.slurry.unknown_scale(problem.applied_pressure)
     return max(float(np.max(np.abs(dw))) / problem.sigma, float(np.max(np.abs(dphi))) / phi_scale)
 
