@@ -357,3 +357,36 @@ def test_the_layered_pads_preconditioner_keeps_gmres_short(monkeypatch):
     r = cmpsim.solve(relative=False, pad_compliance="layer", grid="24x64")
     assert r.converged and counts
     assert np.mean(counts) < 25 and max(counts) < 40, counts
+
+
+# ---------------------------------------------------------------------------------- coarse layered pad
+def _coarse_layer_problem():
+    return build_problem(Config.default().replace(grid="coarse", pad_compliance="layer"))
+
+
+def test_layered_warm_start_keeps_the_nonlocal_deflection_on_the_coarse_grid():
+    """Walking the wafer down on the coarse graded grid (8x24 preset, 11 rings) converges at
+    every position from the last one's state. Re-balancing the last deflection locally (the
+    Winkler bed's rim deflection) made every warm start past h0 = -0.3 sigma diverge."""
+    problem = _coarse_layer_problem()
+    sigma = problem.sigma
+    loads = []
+    for h0 in np.arange(-0.30, -0.75, -0.04):
+        st = problem.state(np.array([h0 * sigma, 0.0, 0.0]))
+        loads.append(st.residual[0])
+    # the load residual rises smoothly towards balance as the wafer comes down
+    assert np.all(np.diff(loads) > 0.0)
+
+
+@pytest.mark.slow  # the failing solve takes ~100 s before it gives up
+@pytest.mark.xfail(
+    strict=True,
+    reason="the coarse graded grid's rim ring: the (phi, w) Newton chatters across the flow-factor floor "
+    "(36-39 floored faces) at h0 = -0.7537 sigma, load still 3.7 % short (docs/model.md, limitations)",
+)
+def test_the_coarse_layered_default_converges_near_the_equal_ring_grid():
+    r = cmpsim.solve(Config.default().replace(grid="coarse", pad_compliance="layer"), relative=False)
+    # equal rings 24x64: -0.956 (12x32: -0.983, 24x64 graded: -0.937); the coarse FFT operator gave -1.028
+    equal = cmpsim.solve(Config.default().replace(grid="24x64", pad_compliance="layer", grid_grading="uniform"), relative=False)
+    assert r.converged
+    assert r.fluid_load_fraction == pytest.approx(equal.fluid_load_fraction, abs=0.1)

@@ -402,7 +402,8 @@ def local_deflection(problem, h_rigid, phi, w0=None, tol: float = 1e-12, max_ite
 
 # ---------------------------------------------------------------------------------- coupled state
 def _start(problem, u, mem: _Memory):
-    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally."""
+    """Initial (phi, w) at u: the tangent predictor, or the last state with w re-balanced locally (on a
+    layered pad: moved by the local balance's change, keeping its nonlocal shape; docs/limitations.md)."""
     if mem.tangent is not None:
         ut, phi_t, w_t, dphi, dw = mem.tangent
         du = u - ut
@@ -412,7 +413,10 @@ def _start(problem, u, mem: _Memory):
     phi = mem.last[1] if mem.last is not None else np.zeros(shape)
     w0 = mem.last[2] if mem.last is not None else None
     h_rigid = _rigid_film(problem, u, problem.xc, problem.yc)
-    return phi, local_deflection(problem, h_rigid, phi, w0)
+    if w0 is None or problem.foundation.local:
+        return phi, local_deflection(problem, h_rigid, phi, w0)
+    h_last = _rigid_film(problem, mem.last[0], problem.xc, problem.yc)
+    return phi, w0 + local_deflection(problem, h_rigid, phi, w0) - local_deflection(problem, h_last, phi, w0)
 
 
 def coupled_state(problem, u):
@@ -433,16 +437,16 @@ def coupled_state(problem, u):
         if lin is not None:  # chord step with the factorisation at hand
             # (on a layered pad, judge by the preconditioner's cheap step before paying for GMRES)
             dphi, dw = lin.approximate_step(ev.R, ev.G)
-            size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+            size = _step_size(problem, dphi, dw)
             if size > (_REUSE_FIRST if prev is None else _CONTRACTION * prev):
                 dphi = None
             elif lin.layer is not None:
                 dphi, dw = lin.solve(ev.R, ev.G)
-                size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+                size = _step_size(problem, dphi, dw)
         if dphi is None:  # Newton step: factorise at the current iterate
             lin = _linearise(problem, ev, ops)
             dphi, dw = lin.solve(ev.R, ev.G)
-            size = max(np.max(np.abs(dw)) / sigma, np.max(np.abs(dphi)))
+            size = _step_size(problem, dphi, dw)
         dphi = dphi.reshape(phi.shape)
         dw = dw.reshape(w.shape)
         # keep the film positive and the step inside a trust region
@@ -466,6 +470,12 @@ def coupled_state(problem, u):
     else:
         raise ValueError(f"the coupled film and pad deflection did not converge in {_MAX_INNER} Newton steps")
     return _converged_state(problem, ev, lin)
+
+
+def _step_size(problem, dphi, dw) -> float:
+    """Largest change of w (sigma) and of phi (slurry's ``unknown_scale``), as the joint Newton's."""
+    phi_scale = problem.slurry.unknown_scale(problem.applied_pressure)
+    return max(float(np.max(np.abs(dw))) / problem.sigma, float(np.max(np.abs(dphi))) / phi_scale)
 
 
 def _converged_state(problem, ev: _Evaluation, lin: CoupledLinearisation) -> PressureState:
