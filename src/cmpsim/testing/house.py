@@ -25,7 +25,7 @@ FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection; load balance and Newton on the wafer position", ("state", "compliance", "models", "wafer", "loadbalance", "equilibrium", "membrane")),
     ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
-    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "tuning", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
+    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "zone_response", "tuning", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.
