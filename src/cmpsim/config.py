@@ -5,6 +5,10 @@ unit, default, valid range and source. Values are stored in SI. They may be give
 string with units (``"4 psi"``, ``"60rpm"``, ``"100nm"``), a pint Quantity, or a plain
 number taken as SI. Every bad value raises ``ValueError`` naming the parameter and its valid
 range; the same text reaches the command line.
+
+An entry of the registry is a :class:`cmpsim.param.Param` (its range check lives there), the
+named grids are in :mod:`cmpsim.grid` and the inputs that another input sets in
+:mod:`cmpsim.derived`; their public names are importable from here as before.
 """
 
 from __future__ import annotations
@@ -17,7 +21,13 @@ from pathlib import Path
 from typing import Any
 
 from . import units
-from .materials import ABRASIVES, FILMS, krieger_dougherty, mass_fraction, volume_fraction
+from .derived import MATCH_RTOL as _MATCH_RTOL
+from .derived import loading_overrides as _loading_overrides
+from .derived import with_zone_load as _with_zone_load
+from .derived import zone_mean_pressure
+from .grid import GRID_EDGE, GRID_PRESETS
+from .materials import ABRASIVES, FILMS, krieger_dougherty, volume_fraction
+from .param import Param
 
 __all__ = [
     "Param",
@@ -36,77 +46,6 @@ __all__ = [
     "GRID_EDGE",
     "PRESETS",
 ]
-
-#: Named grids: central rings x sectors of the polar finite-volume grid (see docs/model.md,
-#: "Grid"); with ``grid_grading = "uniform"`` (the paper preset) the rings x sectors of equal rings.
-GRID_PRESETS = {"coarse": (8, 24), "default": (24, 64), "fine": (48, 128)}
-#: Edge grading of the named grids (``grid_grading = "edge"``): (width of the rim ring, m;
-#: growth of the ring width inwards per ring). Each preset halves the next finer one's rings
-#: everywhere, so all share one ring map on a given wafer, and the rim ring has the same width
-#: on every wafer: one preset, one accuracy at the edge (``docs/model.md``, "Grid").
-GRID_EDGE = {"coarse": (0.9e-3, 0.45), "default": (0.3e-3, 0.15), "fine": (0.15e-3, 0.075)}
-
-
-@dataclass(frozen=True)
-class Param:
-    """One input: where it lives, its unit, default, valid range and source."""
-
-    name: str
-    section: str
-    symbol: str
-    unit: str  # SI unit (pint syntax); "" dimensionless; "choice" / "grid" for strings
-    display: str  # unit used in tables and the CLI
-    default: Any
-    description: str
-    source: str
-    low: float | None = None  # None = unbounded
-    high: float | None = None
-    low_open: bool = True
-    high_open: bool = True
-    choices: tuple[str, ...] = ()
-    items: bool = False  # a list input: comma-separated numbers and one unit; stored as a tuple of SI floats
-
-    def range_text(self) -> str:
-        """Human-readable valid range, in SI."""
-        if self.items:
-            return "a list of numbers, each in " + dataclasses.replace(self, items=False).range_text()
-        if self.choices:
-            return "one of " + ", ".join(repr(c) for c in self.choices)
-        if self.unit == "grid":
-            return "'coarse', 'default', 'fine' or 'NRxNT' (rings x sectors, NR >= 3, NT even >= 8)"
-        lo = "-inf" if self.low is None else f"{self.low:g}"
-        hi = "inf" if self.high is None else f"{self.high:g}"
-        lb = "(" if (self.low is None or self.low_open) else "["
-        hb = ")" if (self.high is None or self.high_open) else "]"
-        unit = f" {self.unit}" if self.unit else ""
-        return f"{lb}{lo}, {hi}{hb}{unit}"
-
-    def check(self, value: Any) -> Any:
-        """``value`` if valid (an SI number, or the text of a choice or grid); ``ValueError`` naming the range if not."""
-        if self.choices:
-            text = str(value).strip()
-            if text not in self.choices:
-                raise ValueError(f"{self.name} must be {self.range_text()}; got {value!r}")
-            return text
-        if self.unit == "grid":
-            return _parse_grid(value)
-        if self.items:  # each value in the range of one item
-            item = dataclasses.replace(self, items=False)
-            return tuple(_check_range(item, v) for v in value)
-        return _check_range(self, value)
-
-    def display_range_text(self) -> str:
-        """Human-readable valid range, in the display unit (``cmpsim params``)."""
-        if self.items:
-            return "a list of numbers, each in " + dataclasses.replace(self, items=False).display_range_text()
-        if self.choices or self.unit == "grid" or not self.display or self.display == self.unit:
-            return self.range_text()
-        lo = "-inf" if self.low is None else f"{units.to_display(self, self.low):.6g}"
-        hi = "inf" if self.high is None else f"{units.to_display(self, self.high):.6g}"
-        lb = "(" if (self.low is None or self.low_open) else "["
-        hb = ")" if (self.high is None or self.high_open) else "]"
-        return f"{lb}{lo}, {hi}{hb} {self.display}"
-
 
 #: Carrier viscosity that gives Thakurta et al.'s 0.005 Pa s at the default loading (12.5 wt% silica)
 #: through the Krieger-Dougherty law (docs/model.md, 'Slurry viscosity').
@@ -236,20 +175,6 @@ PRESETS: dict[str, dict[str, Any]] = {
 }
 
 
-def _check_range(p: Param, v: float) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)) or math.isnan(v) or math.isinf(v):
-        raise ValueError(f"{p.name} must be a finite number; valid range {p.range_text()}; got {v!r}")
-    if p.low is not None and (v < p.low or (p.low_open and v == p.low)):
-        raise ValueError(f"{p.name} = {v:g} {p.unit} is out of range: valid range {p.range_text()}")
-    if p.high is not None and (v > p.high or (p.high_open and v == p.high)):
-        raise ValueError(f"{p.name} = {v:g} {p.unit} is out of range: valid range {p.range_text()}")
-    if p.name == "max_iterations":
-        if int(v) != v:
-            raise ValueError(f"max_iterations must be an integer; valid range {p.range_text()}")
-        return int(v)
-    return float(v)
-
-
 #: Largest particle diameter over pad roughness: the grain-flow and average-flow pictures need
 #: many particles across the roughness layer that forms the film (docs/model.md, "Valid inputs").
 MAX_PARTICLE_ROUGHNESS_RATIO = 0.1
@@ -287,44 +212,6 @@ def _check_consistency(c: "Config") -> None:
             "(0, 0.6) with slurry_model = 'granular' and granular_density = 0, or set granular_density > 0"
         )
 
-
-def _loading_overrides(current: "Config", given: dict[str, Any]) -> dict[str, Any]:
-    """Keep solids_loading and granular_density one setting (docs/model.md, 'Solids loading').
-
-    ``granular_density`` > 0 (the older input) sets ``solids_loading`` (w from phi = rho /
-    rho_a); ``solids_loading`` given alone returns ``granular_density`` to 0 (derived); both
-    given and disagreeing by more than 1 % (more than rounding) is an error naming both.
-    """
-    out = dict(given)
-    abrasive = ABRASIVES[out.get("abrasive", current.slurry.abrasive)]
-    rho = out.get("granular_density", current.slurry.granular_density if "abrasive" in out else 0.0)
-    if "granular_density" in out or ("abrasive" in out and rho > 0 and "solids_loading" not in out):
-        if rho > 0:
-            phi = rho / abrasive.density
-            if phi >= 0.6:
-                raise ValueError(
-                    f"granular_density = {rho:g} kg/m^3 is a solid volume fraction of {phi:.3g} for abrasive = {abrasive.name!r} "
-                    f"({abrasive.density:g} kg/m^3): valid range (0, {0.6 * abrasive.density:g}) kg/m^3"
-                )
-            implied = float(mass_fraction(phi, abrasive.density))
-            if "solids_loading" in out and abs(out["solids_loading"] - implied) > 1e-2 * max(implied, 1e-12):
-                raise ValueError(
-                    f"granular_density = {rho:g} kg/m^3 and solids_loading = {out['solids_loading']:g} contradict each other: "
-                    f"with abrasive = {abrasive.name!r} ({abrasive.density:g} kg/m^3) in water that density is a solids loading of "
-                    f"{implied:.6g}. Set only solids_loading (granular_density = 0 derives the density from it); "
-                    "granular_density is the older input, kept for old configurations"
-                )
-            out["solids_loading"] = implied
-    elif "solids_loading" in out:
-        out["granular_density"] = 0.0
-    return out
-
-
-#: Relative tolerance of "the last zone radius is the wafer radius" and of "applied_pressure is
-#: the zones' mean" (inputs typed in mm or psi carry round-off of ~1e-16 after conversion).
-_MATCH_RTOL = 1e-9
-
-
 def _check_carrier(c: "Config") -> None:
     """Refuse zone and ring inputs that the chosen carrier and pad cannot honour, naming the parameters."""
     p = c.process
@@ -358,40 +245,6 @@ def _check_carrier(c: "Config") -> None:
             f"{c.pad.pad_compliance!r}: a local pad carries the ring's load where it presses, not under the wafer. "
             "Set retaining_ring_pressure = 0, or use pad_compliance = 'layer' (the laterally coupled pad)"
         )
-
-
-def zone_mean_pressure(radii, pressures) -> float:
-    """Area-weighted mean of zone pressures, Pa: sum P_k pi (R_k^2 - R_{k-1}^2) / (pi R_n^2), R_0 = 0 (radii in m)."""
-    edges = (0.0,) + tuple(radii)
-    areas = [b * b - a * a for a, b in zip(edges, edges[1:])]
-    return math.fsum(pk * ak for pk, ak in zip(pressures, areas)) / (edges[-1] ** 2)
-
-
-def _with_zone_load(c: "Config", overrides: dict) -> "Config":
-    """``c`` with applied_pressure set to the zones' mean; refuses an input that sets both to different loads."""
-    mean = zone_mean_pressure(c.zone_outer_radii, c.process.zone_pressures)
-    given = c.process.applied_pressure
-    if "applied_pressure" in overrides and not math.isclose(given, mean, rel_tol=_MATCH_RTOL):
-        where = "the same input sets zone_pressures" if "zone_pressures" in overrides else "zone_pressures are already set"
-        raise ValueError(
-            f"applied_pressure = {given:g} Pa conflicts with zone_pressures ({where}; their area-weighted mean is {mean:g} Pa): set one of them. "
-            "With zone_pressures, applied_pressure is their mean; to go back to one pressure everywhere set zone_pressures = ''"
-        )
-    return Config(**{s: getattr(c, s) for s in _SECTIONS if s != "process"}, process=dataclasses.replace(c.process, applied_pressure=mean))
-
-
-def _parse_grid(value: Any) -> str:
-    s = str(value).strip().lower().replace(" ", "")
-    if s in GRID_PRESETS:
-        return s
-    parts = s.split("x")
-    ok = len(parts) == 2 and all(q.isdigit() for q in parts)
-    if ok:
-        nr, nt = int(parts[0]), int(parts[1])
-        ok = nr >= 3 and nt >= 8 and nt % 2 == 0
-    if not ok:
-        raise ValueError(f"grid must be {PARAMETERS['grid'].range_text()}; got {value!r}")
-    return f"{nr}x{nt}"
 
 
 def parameter(name: str) -> Param:

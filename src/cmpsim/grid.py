@@ -17,7 +17,16 @@ from functools import cached_property
 
 import numpy as np
 
-__all__ = ["PolarGrid", "FaceOperators", "face_operators", "graded_ring_faces", "ring_count", "edge_graded_grid"]
+__all__ = ["PolarGrid", "FaceOperators", "face_operators", "graded_ring_faces", "ring_count", "edge_graded_grid", "GRID_PRESETS", "GRID_EDGE"]
+
+#: Named grids: central rings x sectors of the polar finite-volume grid (see docs/model.md,
+#: "Grid"); with ``grid_grading = "uniform"`` (the paper preset) the rings x sectors of equal rings.
+GRID_PRESETS = {"coarse": (8, 24), "default": (24, 64), "fine": (48, 128)}
+#: Edge grading of the named grids (``grid_grading = "edge"``): (width of the rim ring, m;
+#: growth of the ring width inwards per ring). Each preset halves the next finer one's rings
+#: everywhere, so all share one ring map on a given wafer, and the rim ring has the same width
+#: on every wafer: one preset, one accuracy at the edge (``docs/model.md``, "Grid").
+GRID_EDGE = {"coarse": (0.9e-3, 0.45), "default": (0.3e-3, 0.15), "fine": (0.15e-3, 0.075)}
 
 #: Points of the table from which the graded ring map is inverted (its error, ~1e-9 R_w, is
 #: far below any ring width; the same table serves every refinement of a map).

@@ -89,7 +89,7 @@ def _entry(param):
 def parse(param, value: Any) -> Any:
     """The SI value of the input described by ``param``, checking the unit dimension and the valid range.
 
-    ``param`` is an entry of the parameter registry (a :class:`cmpsim.config.Param`: its
+    ``param`` is an entry of the parameter registry (a :class:`cmpsim.param.Param`: its
     ``name``, SI ``unit``, ``display`` unit, ``choices`` and ``check``); the registry lives
     with the ``Config`` and passes its entries in, so this module never imports it.
     ``value`` may be a string with units (``"4 psi"``), a pint Quantity, or a number (taken

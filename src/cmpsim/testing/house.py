@@ -23,7 +23,7 @@ FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity; the hand-written GMRES", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "abrasion", "kinetics", "materials", "padstack", "uniformity", "krylov")),
     ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems and the pad-coupled Newton matrix; the wafer as a plate", ("grid", "sparse", "reynolds", "coupling", "cavitation", "plate")),
     ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection; load balance and Newton on the wafer position", ("state", "compliance", "models", "wafer", "loadbalance", "equilibrium", "membrane")),
-    ("inputs", "the registries: inputs with units, ranges and sources; outputs with units and meanings", ("units", "config", "outputs")),
+    ("inputs", "the registries: inputs with units, ranges and sources (one entry and its range check; inputs another input sets); outputs with units and meanings", ("units", "param", "config", "derived", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
     ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "zone_response", "tuning", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),

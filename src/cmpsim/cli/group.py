@@ -1,0 +1,65 @@
+"""The ``cmpsim`` command group and what every command shares: exit codes, the error and
+warning lines on stderr, and the terminal tables."""
+
+from __future__ import annotations
+
+import functools
+import sys
+import warnings
+from pathlib import Path
+
+import click
+
+from .._version import __version__
+
+EXIT_INPUT = 2
+EXIT_NO_EQUILIBRIUM = 3
+
+
+def _fail(message: str, code: int = EXIT_INPUT):
+    click.echo(f"cmpsim: error: {message}", err=True)
+    sys.exit(code)
+
+
+def _warn(message: str) -> None:
+    """A warning of cmpsim as the command line prints every one: ``cmpsim: warning: <message>``, one line on stderr."""
+    text = " ".join(str(message).split())
+    click.echo(f"cmpsim: warning: {text}", err=True)
+
+
+def _rich_table(title, header, rows):
+    from rich.table import Table
+
+    t = Table(title=title, show_lines=False)
+    for i, h in enumerate(header):
+        t.add_column(h, justify="right" if i == 1 else "left")
+    for r in rows:
+        t.add_row(*[str(c) for c in r])
+    return t
+
+
+_PACKAGE = Path(__file__).resolve().parents[1]  # the cmpsim package: its warnings are ours
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None, other=warnings.showwarning):
+    """``warnings.showwarning`` of the command line: a warning raised in cmpsim's code is one
+    line on stderr, ``cmpsim: warning: <message>``, without Python's file, line and source echo;
+    other packages' warnings go to ``other`` (Python's format: their source says where they come from)."""
+    try:
+        ours = Path(filename).resolve().is_relative_to(_PACKAGE)
+    except (TypeError, ValueError, OSError):
+        ours = False
+    if not ours:
+        other(message, category, filename, lineno, file, line)
+        return
+    _warn(str(message))
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(version=__version__, prog_name="cmpsim")  # the source's version, not an install's metadata
+@click.pass_context
+def main(ctx):
+    """cmpsim: wafer-scale CMP simulator (grain-flow lubrication + pad asperity contact)."""
+    # for this command only (restored when it ends): importing cmpsim changes no warning display
+    ctx.with_resource(warnings.catch_warnings())
+    warnings.showwarning = functools.partial(show_warning, other=warnings.showwarning)
