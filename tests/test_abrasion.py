@@ -19,6 +19,7 @@ from cmpsim.abrasion import (
     pad_gap,
     size_nodes,
     sphere_load,
+    size_hardness,
     summit_sharing,
 )
 from cmpsim.contact import PadSurface, asperity_contact, asperity_laws, contact_spot_density
@@ -313,18 +314,24 @@ def test_the_new_inputs_sweep_with_units_and_choices(tmp_path):
 
 def test_the_two_step_constants_can_be_calibrated(tmp_path):
     """`cmpsim calibrate --free chemical_rate` fits the chemical step to data it limits."""
+    truth = cmpsim.Config.default().replace(grid="coarse", removal_kinetics="two_step", chemical_rate="60 nm/min")
+    fit = _recalibrate(tmp_path, truth, "applied_pressure", ("2 psi", "4 psi", "6 psi"), "chemical_rate", "150 nm/min")
+    assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
+
+
+def _recalibrate(tmp_path, truth, column, values, free, start):
+    """Write the removal rates `truth` computes at `column` = each of `values` as a data file and
+    calibrate `free` on it from `start` (a round trip through `cmpsim calibrate`)."""
     from cmpsim import calibrate
 
-    truth = cmpsim.Config.default().replace(grid="coarse", removal_kinetics="two_step", chemical_rate="60 nm/min")
     rows = []
-    for psi in (2, 4, 6):
-        r = cmpsim.solve(truth, applied_pressure=f"{psi} psi", relative=False)
-        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{psi} psi")
-    path = tmp_path / "two_step.csv"
+    for v in values:
+        r = cmpsim.solve(truth, **{column: v}, relative=False)
+        rows.append(f"synthetic,removal_rate,{r.removal_rate_mean * 6e10:.6f},nm/min,0.1,absolute,{v}")
+    path = tmp_path / "synthetic.csv"
     path.write_text("# dataset: synthetic\n# citation: made by the model\n# provenance: test\n# conditions: default\n"
-                    "dataset,quantity,value,unit,uncertainty,comparison,applied_pressure\n" + "\n".join(rows) + "\n")
-    fit = calibrate(path, free=["chemical_rate"], config=truth.replace(chemical_rate="150 nm/min"), progress=False)
-    assert fit.values["chemical_rate"] * 6e10 == pytest.approx(60.0, rel=1e-3)
+                    f"dataset,quantity,value,unit,uncertainty,comparison,{column}\n" + "\n".join(rows) + "\n")
+    return calibrate(path, free=[free], config=truth.replace(**{free: start}), progress=False)
 
 
 def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_computes():
@@ -341,3 +348,147 @@ def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_compute
     assert round(lai.removal_rate_mean * 6e10, 2) == 187.31
     # the film, pressure and contact of the default did not move (only the removal law changed)
     assert base.film_thickness_center == old.film_thickness_center and base.contact_load_fraction == old.contact_load_fraction
+
+
+# ------------------------------------------------------------------ indentation size effect (13e.8)
+# alpha-alumina on copper (cmpsim.materials): the particle-film contact of Lai's size series
+def alumina_on_copper(**kw):
+    ca, cf = (1 - 0.231**2) / 416e9, (1 - 0.34**2) / 128e9
+    args = dict(diameter=300e-9, diameter_std=0.0, volume_fraction=0.03, pad_pressure=50e6, e_star=1 / (ca + cf),
+                hardness=1.5e9, k_factor=0.454 + 0.41 * 0.34, film_share=cf / (ca + cf), efficiency=0.1, hardness_limit=15e9)
+    args.update(kw)
+    return AbrasiveContact(**args)
+
+
+def test_the_size_hardness_is_nix_gao_for_a_sphere_to_mpmath_precision():
+    r = np.array([10e-9, 25e-9, 150e-9, 500e-9, 1e-3])
+    got = size_hardness(r, 0.58e9, 8.3e-6)
+    with mpmath.workdps(40):
+        ref = [float(mpmath.mpf("0.58e9") * mpmath.sqrt(1 + mpmath.mpf("8.3e-6") / mpmath.mpf(x))) for x in r]
+    np.testing.assert_allclose(got, ref, rtol=1e-15)
+    # R* = 0 is the hardness itself, bit for bit; the limit caps it (the other body yields beyond it)
+    assert np.array_equal(size_hardness(r, 1.5e9, 0.0), np.full(5, 1.5e9))
+    capped = size_hardness(r, 0.58e9, 8.3e-6, limit=5e9)
+    assert capped.max() == 5e9 and np.array_equal(capped[2:], got[2:])
+
+
+def test_the_indentation_with_a_size_dependent_hardness_matches_an_mpmath_root():
+    """Solve sphere_load(omega; r, E*, H(r), K) = F at 40 digits (the law written out: Hertz, ZMC,
+    plastic) for particles loaded by the pad, each size with its own hardness, and compare."""
+    c = alumina_on_copper(size_length=1e-6)
+    x = np.array([50e-9, 300e-9, 1000e-9])
+    F = pad_force(x, 0.5 * x, c.pad_pressure)
+    H = c.hardness_at(x)
+    got = interference(F, 0.5 * x, c.e_star, H, c.k_factor)
+    regimes = set()
+    with mpmath.workdps(40):
+        for Fi, xi, Hi, gi in zip(F, x, H, got):
+            R, E, K, Hm = mpmath.mpf(xi) / 2, mpmath.mpf(c.e_star), mpmath.mpf(c.k_factor), mpmath.mpf(Hi)
+            we = (3 * mpmath.pi * K * Hm / (4 * E)) ** 2 * R
+            wp = 54 * we
+
+            def load(w):
+                if w < we:
+                    return mpmath.mpf(4) / 3 * E * mpmath.sqrt(R) * w**1.5
+                if w < wp:
+                    u = (w - we) / (wp - we)
+                    area = mpmath.pi * R * w * (1 + u * u * (3 - 2 * u))
+                    return Hm * (1 - (1 - K) * mpmath.log(wp / w) / mpmath.log(54)) * area
+                return 2 * mpmath.pi * R * w * Hm
+
+            w = mpmath.findroot(lambda w: load(w) - mpmath.mpf(Fi), (we * mpmath.mpf("1.0000001"), wp), solver="anderson") if load(we) < Fi < load(wp) else mpmath.findroot(lambda w: load(w) - mpmath.mpf(Fi), mpmath.mpf(gi))
+            regimes.add("elastic" if w < we else "elastoplastic" if w < wp else "plastic")
+            assert gi == pytest.approx(float(w), rel=1e-11)
+    assert "elastoplastic" in regimes
+
+
+def test_without_a_size_length_the_law_is_todays_bit_for_bit_and_tends_to_it_continuously():
+    args = (np.array([2e4, 8e4]), np.array([4e-4, 1.7e-3]), np.array([0.7, 0.7]))
+    for x in (50e-9, 300e-9, 1000e-9):
+        plain = abrasive_removal_rate(*args, alumina_on_copper(diameter=x, hardness_limit=np.inf))
+        zero = abrasive_removal_rate(*args, alumina_on_copper(diameter=x, size_length=0.0))
+        assert np.array_equal(plain.rate, zero.rate) and np.array_equal(plain.depth, zero.depth)
+        # R* -> 0: the rate tends to today's, with the first-order change of H = H_0 (1 + R*/2r)
+        for length in (1e-12, 1e-14):
+            small = abrasive_removal_rate(*args, alumina_on_copper(diameter=x, size_length=length)).rate
+            assert np.all(small < plain.rate) and np.allclose(small / plain.rate - 1, 0.0, atol=2 * length / x)
+
+
+def test_with_a_size_length_copper_is_harder_under_small_particles_and_the_rate_rises_with_size():
+    """The mechanism, not a comparison with data: at a fixed mass loading today's law is flat in
+    size; with R* > 0 small particles meet a harder film, sink less and plough less."""
+    args = (np.array([3e4]), np.array([6e-4]), np.array([0.7]))
+    sizes = np.array([50e-9, 100e-9, 300e-9, 1000e-9, 2000e-9])
+    flat = [abrasive_removal_rate(*args, alumina_on_copper(diameter=x)).rate[0] for x in sizes]
+    np.testing.assert_allclose(flat, flat[0], rtol=1e-9)
+    rising = [abrasive_removal_rate(*args, alumina_on_copper(diameter=x, size_length=1e-6)).rate[0] for x in sizes]
+    assert np.all(np.diff(rising[:4]) > 0) and rising[0] < 0.5 * flat[0]
+    # 1 -> 2 um: H = 2.6 -> 2.1 GPa, inside the Zhao-Maietta-Chang band, where the indentation at a
+    # fixed load does not fall as the hardness rises (next test): the rate dips by 0.6 %
+    assert rising[4] / rising[3] - 1 == pytest.approx(-0.006, abs=0.002)
+    # the rate cannot fall below that of a purely elastic film: the hardness only sets the yield
+    very_hard = abrasive_removal_rate(*args, alumina_on_copper(diameter=50e-9, size_length=1.0, hardness_limit=np.inf)).rate[0]
+    assert 0.3 * flat[0] < very_hard == pytest.approx(rising[0], rel=1e-12)  # 9.6 GPa at 50 nm: already elastic
+
+
+def test_the_rate_is_continuous_where_the_films_size_hardness_reaches_the_abrasives():
+    """Where H_0 sqrt(1 + R*/r) reaches the limit the hardness is capped: no jump in the rate."""
+    base = alumina_on_copper(diameter=100e-9, size_length=1e-6)
+    r = 50e-9
+    length_b = ((base.hardness_limit / base.hardness) ** 2 - 1) * r  # R* at which H(r) = limit exactly
+    args = (np.array([3e4]), np.array([6e-4]), np.array([0.7]))
+    rates = [abrasive_removal_rate(*args, alumina_on_copper(diameter=100e-9, size_length=length_b * (1 + eps))).rate[0] for eps in (-1e-9, 1e-9)]
+    assert rates[1] / rates[0] - 1 == pytest.approx(0.0, abs=1e-8)
+
+
+def test_a_negative_size_length_is_refused_naming_it():
+    with pytest.raises(ValueError, match="size_length"):
+        alumina_on_copper(size_length=-1e-9)
+    with pytest.raises(ValueError, match="film_size_length"):
+        cmpsim.Config.default().replace(film_size_length=-1e-6)
+    with pytest.raises(ValueError, match="film_hardness"):
+        cmpsim.Config.default().replace(film_hardness=-1.0)
+
+
+def test_the_film_hardness_and_size_length_reach_the_abrasive_law():
+    cfg = cmpsim.Config.default().replace(film="copper", abrasive="alumina")
+    c0 = abrasive_contact(cfg)
+    assert c0.size_length == 0.0 and c0.hardness == 1.5e9 and c0.hardness_limit == 15e9
+    c1 = abrasive_contact(cfg.replace(film_hardness=0.58e9, film_size_length=8.3e-6))
+    assert c1.hardness == 0.58e9 and c1.size_length == 8.3e-6
+    # ceria on oxide: the particle is the softer body, so the film's size effect does not enter
+    c2 = abrasive_contact(cfg.replace(film="oxide", abrasive="ceria", film_size_length=1e-6))
+    assert c2.size_length == 0.0 and c2.hardness == 6e9
+
+
+def test_inside_the_zmc_band_a_harder_film_is_not_indented_less():
+    """A limitation of the elastic-plastic law (docs/model.md 13e.8), pinned so that it is seen: at a
+    fixed load the Zhao-Maietta-Chang interpolation gives an interference that rises with the
+    hardness from omega/omega_e ~ 47 to ~ 21 (H = 1.5 -> 2.3 GPa, 500 nm alumina on copper at the
+    pad's 50 MPa) before it falls towards the Hertz value; only the elastic and plastic ends are
+    monotonic."""
+    c = alumina_on_copper()
+    r = 0.5e-6
+    F = np.array([c.pad_pressure * math.pi * r * r])
+    omega = [interference(F, r, c.e_star, h, c.k_factor)[0] / r for h in (1.5e9, 2.0e9, 2.3e9, 3e9, 6e9, 15e9)]
+    assert omega[0] < omega[1] < omega[2] and omega[2] > omega[3] > omega[4] >= omega[5]
+    hertz = (3 * F[0] / (4 * c.e_star * math.sqrt(r))) ** (2 / 3) / r
+    assert omega[5] == pytest.approx(hertz, rel=1e-12)
+
+
+def test_the_size_length_sweeps_in_micrometres_and_calibrates_from_a_size_series(tmp_path):
+    """film_size_length is an ordinary registry input: a sweep takes it in um, and `cmpsim calibrate
+    --free film_size_length` recovers it from a (synthetic) size series of the user's own film."""
+    import tomllib
+
+    from cmpsim.sweeps import SweepSpec, sweep
+
+    base = '[base]\ngrid = "coarse"\nfilm = "copper"\nabrasive = "alumina"\nparticle_diameter = "100 nm"\n'
+    ds = sweep(SweepSpec.from_mapping(tomllib.loads(base + '[axes]\nfilm_size_length = ["0 um", "1 um"]\n')), workers=0, progress=False)
+    assert ds["film_size_length"].values.tolist() == [0.0, pytest.approx(1e-6)]
+    rr = ds["removal_rate_mean"].values
+    assert rr[1] < 0.7 * rr[0]  # 100 nm alumina on copper: H = 1.5 GPa x sqrt(21) = 6.9 GPa, a shallower groove
+
+    truth = cmpsim.Config.default().replace(grid="coarse", film="copper", abrasive="alumina", film_size_length="1 um")
+    fit = _recalibrate(tmp_path, truth, "particle_diameter", ("100 nm", "400 nm", "1500 nm"), "film_size_length", "0.6 um")
+    assert fit.values["film_size_length"] == pytest.approx(1e-6, rel=1e-3)

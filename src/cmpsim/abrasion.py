@@ -28,6 +28,8 @@ Dornfeld (IEEE Trans. Semicond. Manuf. 14, 112 (2001); 16, 469 (2003)), Zhao & C
    plastic law of the pad summits (``cmpsim.contact``), with the particle-film effective modulus
    E* and the hardness and K = 0.454 + 0.41 nu of the softer body; the film takes the share
    C_f / (C_f + C_a) of it (C = (1 - nu^2)/E, each body's Hertz compliance): delta = omega C_f / (C_f + C_a).
+   A film with an indentation size length R* > 0 is harder under small particles,
+   H(r) = H_0 sqrt(1 + R*/r) (:func:`size_hardness`; Nix & Gao 1998, Swadener et al. 2002).
 4. **Ploughed volume.** Sliding with the pad at |u_pad - u_wafer|, the particle sweeps the
    circular segment of depth delta of its own section: A_g = r^2 (theta - sin theta cos theta),
    cos theta = 1 - delta / r. A share k_a (``abrasion_efficiency``) of the ploughed groove
@@ -57,6 +59,7 @@ __all__ = [
     "pad_force",
     "pad_gap",
     "summit_sharing",
+    "size_hardness",
     "abrasive_removal_rate",
     "PLASTIC_RATIO",
 ]
@@ -94,6 +97,13 @@ class AbrasiveContact:
         C_f / (C_a + C_f): the share of the interference taken by the film, in (0, 1].
     efficiency : float
         k_a: share of the ploughed groove removed, in [0, 1].
+    size_length : float
+        R*, m (>= 0): the indentation size length of the film's hardness under a sphere,
+        H(r) = hardness sqrt(1 + R*/r) for a particle of radius r (:func:`size_hardness`);
+        0 (default): no size effect, ``hardness`` for every particle.
+    hardness_limit : float
+        Pa (> 0): the most :func:`size_hardness` gives (the hardness of the other body, beyond which
+        the particle is the one that yields); inf (default): no limit.
     """
 
     diameter: float
@@ -105,6 +115,8 @@ class AbrasiveContact:
     k_factor: float
     film_share: float
     efficiency: float
+    size_length: float = 0.0
+    hardness_limit: float = float("inf")
 
     def __post_init__(self):
         checks = (
@@ -117,10 +129,18 @@ class AbrasiveContact:
             ("k_factor", 0 < self.k_factor <= 1, "(0, 1]"),
             ("film_share", 0 < self.film_share <= 1, "(0, 1]"),
             ("efficiency", 0 <= self.efficiency <= 1, "[0, 1]"),
+            ("size_length", self.size_length >= 0, "[0, inf) m"),
         )
         for name, ok, rng in checks:
             if not (ok and np.isfinite(getattr(self, name))):
                 raise ValueError(f"{name} must be in {rng}; got {getattr(self, name)!r}")
+        if not self.hardness_limit > 0:  # inf allowed: no limit
+            raise ValueError(f"hardness_limit must be in (0, inf] Pa; got {self.hardness_limit!r}")
+
+    def hardness_at(self, diameter):
+        """Hardness (Pa) the film opposes to a particle of ``diameter`` (m): :func:`size_hardness`
+        at radius diameter/2 with this contact's size length and limit (``hardness`` when R* = 0)."""
+        return size_hardness(0.5 * np.asarray(diameter, dtype=float), self.hardness, self.size_length, self.hardness_limit)
 
     @property
     def coverage(self) -> float:
@@ -158,6 +178,25 @@ def size_nodes(mean: float, std: float, n: int = SIZE_NODES):
     return np.exp(np.log(mean) - 0.5 * s2 + np.sqrt(s2) * t), w / w.sum()
 
 
+def size_hardness(radius, hardness, length, limit=np.inf):
+    """Hardness (Pa) of a crystalline film under a sphere of ``radius`` r (m): H = H_0 sqrt(1 + R*/r).
+
+    The indentation size effect of a spherical indenter (Swadener, George & Pharr, J. Mech. Phys.
+    Solids 50, 681 (2002), from the model of Nix & Gao, J. Mech. Phys. Solids 46, 411 (1998)):
+    a sphere pressed into the film needs geometrically necessary dislocations of density
+    rho_G = 1/(b r), whatever its depth, on top of the statistically stored rho_S; with Taylor
+    hardening H = H_0 sqrt(1 + rho_G/rho_S) = H_0 sqrt(1 + R*/r), R* = 1/(b rho_S) (``length``,
+    m; 0 gives H_0 = ``hardness`` exactly). The result is capped at ``limit`` (Pa; the other
+    body's hardness: beyond it that body yields first). Depth-free for a sphere, so the
+    interference law of :func:`interference` is solved with H(r) in closed form or by bisection
+    as before.
+    """
+    r = np.asarray(radius, dtype=float)
+    if length == 0:
+        return np.minimum(np.full_like(r, float(hardness)), limit)
+    return np.minimum(hardness * np.sqrt(1.0 + length / r), limit)
+
+
 def _omega_e(radius, e_star, hardness, k):
     return (3.0 * np.pi * k * hardness / (4.0 * e_star)) ** 2 * radius
 
@@ -184,26 +223,28 @@ def sphere_load(omega, radius, e_star, hardness, k):
 def interference(load, radius, e_star, hardness, k):
     """The interference omega (m) at which :func:`sphere_load` equals ``load`` (N); 0 for no load.
 
+    ``load``, ``radius`` and ``hardness`` (Pa) broadcast together (a hardness per particle size:
+    :func:`size_hardness`).
+
     Closed form in the elastic and plastic ranges; bisection on ln omega between omega_e and
     54 omega_e (the law is increasing there) to machine precision.
     """
-    F = np.asarray(load, dtype=float)
-    R = np.broadcast_to(np.asarray(radius, dtype=float), F.shape)
-    we = _omega_e(R, e_star, hardness, k)
+    F, R, H = np.broadcast_arrays(np.asarray(load, dtype=float), np.asarray(radius, dtype=float), np.asarray(hardness, dtype=float))
+    we = _omega_e(R, e_star, H, k)
     wp = PLASTIC_RATIO * we
-    f_e = sphere_load(we * (1 - 1e-15), R, e_star, hardness, k)
-    f_p = sphere_load(wp, R, e_star, hardness, k)
+    f_e = sphere_load(we * (1 - 1e-15), R, e_star, H, k)
+    f_p = sphere_load(wp, R, e_star, H, k)
     elastic = (3.0 * np.maximum(F, 0.0) / (4.0 * e_star * np.sqrt(R))) ** (2.0 / 3.0)
-    plastic = F / (2.0 * np.pi * R * hardness)
+    plastic = F / (2.0 * np.pi * R * H)
     # bisect only where the load falls in the elastic-plastic range (elementwise, so the same bits)
     between = (F >= f_e) & (F < f_p)
     ep = np.array(we)  # placeholder outside the range, never selected below
     if np.any(between):
-        Fb, Rb = F[between], R[between]
+        Fb, Rb, Hb = F[between], R[between], H[between]
         lo, hi = np.log(we[between]), np.log(wp[between])
         for _ in range(_BISECTIONS):
             mid = 0.5 * (lo + hi)
-            below = sphere_load(np.exp(mid), Rb, e_star, hardness, k) < Fb
+            below = sphere_load(np.exp(mid), Rb, e_star, Hb, k) < Fb
             lo, hi = np.where(below, mid, lo), np.where(below, hi, mid)
         ep[between] = np.exp(0.5 * (lo + hi))
     return np.where(F < f_e, elastic, np.where(F < f_p, ep, plastic))
@@ -352,7 +393,8 @@ def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive:
     gap = np.where(in_contact, pad_gap(p_r, x, n_i, a.pad_pressure), 0.0)
 
     def film_groove(load, diameter):
-        return groove_area(0.5 * diameter, a.film_share * interference(load, 0.5 * diameter, a.e_star, a.hardness, a.k_factor))
+        hardness = a.hardness_at(diameter)  # the film's hardness under each size (indentation size effect)
+        return groove_area(0.5 * diameter, a.film_share * interference(load, 0.5 * diameter, a.e_star, hardness, a.k_factor))
 
     if spot_density is None:
         load = pad_force(x - gap[..., None], 0.5 * x, a.pad_pressure)  # (points, size classes)
@@ -366,5 +408,5 @@ def abrasive_removal_rate(contact_pressure, area_ratio, sliding_speed, abrasive:
     rate = np.where(in_contact, a.efficiency * ar * speed * swept, 0.0)
     active = ar * np.sum(n_i * (x > gap[..., None]), axis=-1)
     f_mean = np.where(in_contact, pad_force(a.diameter - gap, 0.5 * a.diameter, a.pad_pressure), 0.0)
-    d_mean = a.film_share * interference(f_mean, 0.5 * a.diameter, a.e_star, a.hardness, a.k_factor)
+    d_mean = a.film_share * interference(f_mean, 0.5 * a.diameter, a.e_star, a.hardness_at(a.diameter), a.k_factor)
     return AbrasionResult(rate=rate, active_particles=active, gap=gap, particle_load=f_mean, depth=d_mean)

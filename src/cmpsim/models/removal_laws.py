@@ -10,6 +10,7 @@ A new law (e.g. an abrasive-particle law) adds a class here and an entry in the 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 
@@ -85,12 +86,17 @@ def abrasive_contact(config) -> AbrasiveContact:
     The pad presses an embedded particle with p_pad = min(H_pad, 4 E'_pad / (3 pi)), E'_pad the
     pad-particle effective modulus; the particle-film contact takes E* from both bodies and the
     hardness and K of the softer one; the film takes its Hertz compliance share of the
-    interference (docs/model.md, section 13e).
+    interference (docs/model.md, section 13e). ``film_hardness`` > 0 replaces the table's film
+    hardness; ``film_size_length`` R* makes the film's hardness grow under small particles,
+    H(r) = H_0 sqrt(1 + R*/r) up to the abrasive's hardness (section 13e.8).
     """
     c = config
     a, f = ABRASIVES[c.abrasive], FILMS[c.film]
+    if c.film_hardness > 0:  # a measured film hardness replaces the table's
+        f = dataclasses.replace(f, hardness=c.film_hardness)
     pad_e = 1.0 / ((1.0 - c.pad_poisson**2) / c.pad_modulus + a.reduced_compliance)
-    soft = f if f.hardness <= a.hardness else a
+    film_softer = f.hardness <= a.hardness
+    soft = f if film_softer else a
     compliance = a.reduced_compliance + f.reduced_compliance
     return AbrasiveContact(
         diameter=c.particle_diameter,
@@ -102,6 +108,9 @@ def abrasive_contact(config) -> AbrasiveContact:
         k_factor=0.454 + 0.41 * soft.poisson,
         film_share=f.reduced_compliance / compliance,
         efficiency=c.abrasion_efficiency,
+        # the film's indentation size effect, up to the abrasive's hardness (then the particle yields)
+        size_length=c.film_size_length if film_softer else 0.0,
+        hardness_limit=a.hardness if film_softer else float("inf"),
     )
 
 
