@@ -26,6 +26,12 @@ What it shows (the script asserts each statement):
   whole rather than the rate under it (`zone_response_inside`), because the 8 µm slurry film
   carries a zone's extra load. Without `keep="pressure"` the tuner may change the load: here the
   mean pressure rises by under 2 %, and the mean rate with it.
+- **The response width at each boundary** (`tuned.response_widths`, or
+  `cmpsim.zone_response.zone_response(config)` at given pressures): over how many millimetres the
+  rate's answer to a pressure step at a zone boundary falls from 90 % to 10 %.
+- **The production case** is a preset: `cmpsim tune-zones --preset 300mm --json` (a 300 mm wafer,
+  five zones, a retaining ring on the layered pad; minutes per run, so not run here; its numbers
+  are in [model, section 13f](../model.md#13f-carrier-rigid-or-membrane-beyond-the-paper)).
 - **The ring tames the edge of the layered pad.** On `pad_compliance = "layer"` the ring's
   pressure pushes the pad away from the wafer's edge and the edge ring's rate falls
   monotonically with it.
@@ -59,6 +65,11 @@ for name, r in (("rigid carrier", rigid), ("membrane, uniform zones", membrane))
 print(f"{'tuned zones':26s} non-uniformity {100 * tuned.within_wafer_nonuniformity:.3f} %, pressures "
       + ", ".join(f"{p / 6894.757:.2f}" for p in tuned.zone_pressures) + " psi")
 print("share of each zone's response under the zone:", ", ".join(f"{v:.2f}" for v in tuned.response_inside))
+# the 10-90 % width of the rate's answer to a pressure step at each inner zone boundary (cmpsim.zone_response)
+widths = tuned.response_widths
+print("response width at each boundary:", ", ".join(
+    f"{1e3 * w.boundary:g} mm: " + ("no fall" if w.width is None else f"{1e3 * w.width:.1f} mm") for w in widths))
+assert len(widths) == 3
 bending = membrane.profiles["wafer_bending_profile"]
 p = membrane.solution.state.p_total / head.applied_pressure
 assert 2.0e-6 < np.max(np.abs(bending)) < 3.0e-6

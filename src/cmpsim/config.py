@@ -140,7 +140,8 @@ _SECTIONS = ("wafer", "process", "slurry", "pad", "numerics")
 #: Named presets: the inputs in which each differs from the defaults of :data:`PARAMETERS`
 #: (values as a user would type them). ``paper`` is the paper's model exactly, as cmpsim
 #: 0.1.0 implemented it (``tests/test_paper_preset.py`` pins its results); ``default`` is
-#: the predictive model of docs/model.md ("Beyond the paper").
+#: the predictive model of docs/model.md ("Beyond the paper"); ``300mm`` a production head and
+#: recipe on the predictive model (docs/model.md, 13f).
 PRESETS: dict[str, dict[str, Any]] = {
     "default": {},
     "paper": {
@@ -157,6 +158,21 @@ PRESETS: dict[str, dict[str, Any]] = {
         "asperity_radius": 50e-6,
         "pad_roughness": 15e-6,
         "reference_roughness": 15e-6,
+    },
+    # A production oxide polish of a 300 mm wafer (sources of every number: docs/model.md, 13f,
+    # "The 300mm preset"). zone_pressures stay unset: applied_pressure fills every zone.
+    "300mm": {
+        "wafer_diameter": "300 mm",
+        "wafer_thickness": "775 um",
+        "edge_exclusion": "3 mm",
+        "carrier": "membrane",
+        "zone_radii": "50,100,130,145,150 mm",
+        "retaining_ring_pressure": "3 psi",
+        "pad_compliance": "layer",
+        "applied_pressure": "3 psi",
+        "rotation_speed": "93 rpm",
+        "wafer_speed_ratio": 87.0 / 93.0,
+        "centre_distance": "0.2 m",
     },
 }
 
@@ -296,7 +312,7 @@ class Config:
 
     @classmethod
     def preset(cls, name: str) -> "Config":
-        """A named preset of :data:`PRESETS`: ``"default"`` or ``"paper"``."""
+        """A named preset of :data:`PRESETS`: ``"default"``, ``"paper"`` or ``"300mm"``."""
         if name not in PRESETS:
             raise ValueError(f"preset must be one of {', '.join(repr(p) for p in PRESETS)}; got {name!r}")
         return cls().replace(**PRESETS[name])

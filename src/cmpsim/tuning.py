@@ -29,10 +29,10 @@ from scipy.optimize import lsq_linear
 
 from . import models
 from .config import Config
-from .model import build_problem, solve
 from .state import EquilibriumError
 from .uniformity import ring_areas_inside, weighted_std_over_mean
 from .units import to_si
+from .zone_response import RESPONSE_STEP, ZoneSolver, boundary_widths, inside_share, profile_of, response_matrix
 
 __all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "KEEP", "LENGTH_UNITS"]
 
@@ -41,8 +41,6 @@ PSI = 6894.757293168361
 DEFAULT_BOUNDS = (0.5 * PSI, 8.0 * PSI)
 #: What a tuning may keep fixed besides flattening.
 KEEP = (None, "pressure", "rate")
-#: Relative step of the finite-difference zone response.
-RESPONSE_STEP = 0.02
 #: Units a column of an incoming-thickness CSV may name in its header (``radius_mm``), in m.
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9, "angstrom": 1e-10}
 
@@ -138,18 +136,15 @@ class ZoneTuning:
 
     @property
     def response_inside(self) -> tuple:
-        """Share of each zone's removal response that falls inside the zone itself (fraction per zone).
+        """Share of each zone's removal response that falls inside the zone itself (fraction per zone;
+        :func:`cmpsim.zone_response.inside_share`): 1 when a zone moves the rate only under itself,
+        the zone's area share when its pressure moves the wafer as a whole."""
+        return inside_share(self.response, self.profile["radius"], self.ring_faces, self.zone_radii)
 
-        The ring-area-weighted |d RR_i / d P_k| summed over the rings whose centre lies in zone k,
-        over its sum over the wafer: 1 when a zone moves the rate only under itself, the zone's
-        area share when its pressure moves the wafer as a whole.
-        """
-        r = np.asarray(self.profile["radius"])
-        edges = np.concatenate([[0.0], self.zone_radii])
-        ring_area = np.diff(np.asarray(self.ring_faces) ** 2)
-        weight = np.abs(self.response) * ring_area[:, None]
-        inside = [(r >= a) & (r < b) for a, b in zip(edges[:-1], edges[1:])]
-        return tuple(float(weight[m, k].sum() / weight[:, k].sum()) if weight[:, k].sum() > 0 else float("nan") for k, m in enumerate(inside))
+    @property
+    def response_widths(self) -> list:
+        """The 10-90 % response width at each inner zone boundary (:func:`cmpsim.zone_response.boundary_widths`)."""
+        return boundary_widths(self.response, self.profile["radius"], self.ring_faces, self.zone_radii)
 
     def to_dict(self) -> dict:
         """The JSON object of ``cmpsim tune-zones --json`` (SI units)."""
@@ -164,7 +159,8 @@ class ZoneTuning:
                 "profile": {k: list(map(float, v)) for k, v in self.before["profile"].items()},
             },
             "zone_response_inside": list(self.response_inside),
-            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1"},
+            "zone_response_width": [b.to_dict() for b in self.response_widths],
+            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1", "zone_response_width": "m"},
             "solves": self.solves,
         }
         if self.remaining_thickness is not None:
@@ -177,34 +173,9 @@ class ZoneTuning:
         return out
 
 
-class _Solver:
-    """Solves of one tuning: each from the last solved equilibrium and bending (warm starts), counted."""
-
-    def __init__(self, config: Config):
-        self.config, self.solves = config, 0
-        self.start, self.bending = None, None
-
-    def __call__(self, pressures):
-        """The solve at these zone pressures (Pa), warm-started from the adopted one."""
-        cfg = self.config.replace(zone_pressures=tuple(float(p) for p in pressures))
-        problem = build_problem(cfg)
-        problem.carrier.initial_bending = self.bending
-        r = solve(cfg, start=self.start, relative=False, problem=problem)
-        self.solves += 1
-        return r
-
-    def adopt(self, result) -> None:
-        """Start the next solves from ``result``'s equilibrium and bending."""
-        self.start, self.bending = result.solution.state.u, result.problem.carrier.bending[1]
-
-
 def _weights(result) -> np.ndarray:
     """Area of each ring inside the edge exclusion, m^2 (the weights of the output's non-uniformity)."""
     return ring_areas_inside(result.grid.ring_faces, result.grid.radius - result.config.edge_exclusion)
-
-
-def _profile(result) -> dict:
-    return {"radius": np.asarray(result.profiles["radius"]), "rate": np.asarray(result.profiles["removal_rate_profile"])}
 
 
 def _incoming_on_rings(incoming, result) -> np.ndarray:
@@ -214,7 +185,7 @@ def _incoming_on_rings(incoming, result) -> np.ndarray:
     exclusion); otherwise ValueError naming the range needed and the range given.
     """
     r_in, t_in = incoming
-    radius = _profile(result)["radius"]
+    radius = profile_of(result)["radius"]
     used = radius[_weights(result) > 0]
     if r_in[0] > used[0] or r_in[-1] < used[-1]:
         raise ValueError(
@@ -226,7 +197,7 @@ def _incoming_on_rings(incoming, result) -> np.ndarray:
 
 def _remaining(result, thickness, polish_time) -> np.ndarray:
     """Remaining thickness t_in - RR polish_time on the profile radii, m."""
-    return thickness - _profile(result)["rate"] * polish_time
+    return thickness - profile_of(result)["rate"] * polish_time
 
 
 def _check_not_through(remaining, result, polish_time, which: str) -> None:
@@ -234,7 +205,7 @@ def _check_not_through(remaining, result, polish_time, which: str) -> None:
     inside = _weights(result) > 0
     if np.any(remaining[inside] <= 0):
         i = int(np.argmin(np.where(inside, remaining, np.inf)))
-        r = _profile(result)["radius"][i]
+        r = profile_of(result)["radius"][i]
         raise ValueError(
             f"polish_time = {polish_time:g} s removes more than the incoming thickness {which}: remaining "
             f"{remaining[i]:g} m at radius {1e3 * r:g} mm; shorten polish_time"
@@ -309,7 +280,7 @@ def tune_zones(
     start = np.array(config.zone_pressure_values, dtype=float)
     if np.any(start < lo) or np.any(start > hi):
         raise ValueError(f"the start's zone pressures {', '.join(f'{p:g}' for p in start)} Pa lie outside the bounds [{lo:g}, {hi:g}] Pa")
-    run = _Solver(config)
+    run = ZoneSolver(config)
     base = run(start)
     run.adopt(base)
     weights = _weights(base)
@@ -323,7 +294,7 @@ def tune_zones(
         _check_not_through(_remaining(base, offset, polish_time), base, polish_time, "at the start's pressures")
 
     def quantity(result) -> np.ndarray:
-        return offset + scale * _profile(result)["rate"]
+        return offset + scale * profile_of(result)["rate"]
 
     target = float(np.sum(weights * quantity(base)) / weights.sum())  # the start's mean of q
 
@@ -335,14 +306,9 @@ def tune_zones(
     history = [(tuple(pressures), wiwnu)]
     response = np.zeros((weights.size, start.size))
     for _ in range(max_steps):
-        rate = _profile(current)["rate"]
+        rate = profile_of(current)["rate"]
         q = quantity(current)
-        for k in range(start.size):  # the zone response, warm-started from the current solve
-            dp = RESPONSE_STEP * pressures[k]
-            trial = pressures.copy()
-            trial[k] += dp if trial[k] + dp <= hi else -dp
-            step_k = trial[k] - pressures[k]
-            response[:, k] = (_profile(run(trial))["rate"] - rate) / step_k
+        response = response_matrix(run, pressures, rate, high=hi, step=RESPONSE_STEP)  # warm-started from the current solve
         # least squares in (dP, m): sqrt(a_i) (q_i + s J dP - m) -> 0, relative to the mean of q
         w = np.sqrt(weights / weights.sum()) / abs(target)
         A = np.hstack([w[:, None] * (scale * response), -w[:, None]])
@@ -379,20 +345,20 @@ def tune_zones(
         if gain < rtol:
             break
     final_cfg = config.replace(zone_pressures=tuple(float(p) for p in pressures))
-    before = {"zone_pressures": tuple(start), "within_wafer_nonuniformity": weighted_std_over_mean(_profile(base)["rate"], weights), "profile": _profile(base)}
+    before = {"zone_pressures": tuple(start), "within_wafer_nonuniformity": weighted_std_over_mean(profile_of(base)["rate"], weights), "profile": profile_of(base)}
     extra = {}
     if incoming is not None:
         remaining = _remaining(current, offset, polish_time)
         _check_not_through(remaining, current, polish_time, "at the tuned pressures")
-        radius = _profile(current)["radius"]
+        radius = profile_of(current)["radius"]
         extra = dict(polish_time=polish_time, remaining_thickness={"radius": radius, "thickness": remaining}, remaining_nonuniformity=wiwnu)
         before.update(remaining_thickness={"radius": radius, "thickness": _remaining(base, offset, polish_time)}, remaining_nonuniformity=history[0][1])
-        wiwnu = weighted_std_over_mean(_profile(current)["rate"], weights)
+        wiwnu = weighted_std_over_mean(profile_of(current)["rate"], weights)
     return ZoneTuning(
         zone_radii=tuple(radii),
         zone_pressures=tuple(float(p) for p in pressures),
         within_wafer_nonuniformity=wiwnu,
-        profile=_profile(current),
+        profile=profile_of(current),
         before=before,
         response=response,
         config=final_cfg,

@@ -20,7 +20,7 @@ from . import calibrate, die, point, reproduce, serve, sweep, tune_zones, valida
 from .calibrate import _ListOptionsCommand, _split_names, calibrate_command
 from .die import die_command
 from .group import _PACKAGE, EXIT_INPUT, EXIT_NO_EQUILIBRIUM, _fail, _rich_table, _warn, main, show_warning
-from .inputs import config_options, load_config, params, parse_assignments
+from .inputs import PRESET_NAMES, config_options, load_config, params, parse_assignments
 from .point import run, write_outputs
 from .reproduce import reproduce_command
 from .serve import serve_command
@@ -35,6 +35,7 @@ __all__ = [
     "parse_assignments",
     "load_config",
     "config_options",
+    "PRESET_NAMES",
     "show_warning",
     "run",
     "write_outputs",

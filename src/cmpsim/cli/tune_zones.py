@@ -75,3 +75,9 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
         f"within-wafer non-uniformity: {100 * result.before['within_wafer_nonuniformity']:.3f} % -> "
         f"{100 * result.within_wafer_nonuniformity:.3f} % ({result.solves} operating points solved)"
     )
+    widths = ", ".join(
+        f"{1e3 * b.boundary:g} mm: " + ("no fall" if b.width is None else f"{1e3 * b.width:.1f} mm")
+        for b in result.response_widths
+    )
+    if widths:
+        console.print(f"zone response width (10-90 % of a pressure step) at each boundary: {widths}")

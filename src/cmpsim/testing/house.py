@@ -25,7 +25,7 @@ FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection, and with the position in one Newton iteration; its linear response to the carrier's film; load balance and Newton on the wafer position", ("state", "compliance", "compliantfilm", "jointnewton", "sensitivity", "models", "wafer", "loadbalance", "equilibrium", "membrane")),
     ("inputs", "the registries: inputs with units, ranges and sources (one entry and its range check; inputs another input sets); outputs with units and meanings", ("units", "param", "config", "derived", "outputs")),
     ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
-    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "tuning", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
+    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "zone_response", "tuning", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.

@@ -1,0 +1,113 @@
+"""The 300mm preset: a production head and recipe (issue 25; docs/model.md 13f, 'The 300mm preset')."""
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from cmpsim.cli import PRESET_NAMES, load_config, main
+from cmpsim.config import PRESETS, Config, zone_mean_pressure
+
+PSI = 6894.757293168361
+# Measured on the preset (default grid; docs/model.md 13f and docs/validation.md quote them): the
+# non-uniformity with the preset's 3 mm edge exclusion, each zone's share of its response inside
+# itself and its local gain, and the 10-90 % response width at the four inner boundaries (mm).
+NONUNIFORMITY_3MM = 0.03105
+INSIDE_SHARES = (0.297, 0.545, 0.303, 0.201, 0.067)
+GAINS = (0.186, 0.080, -0.513, 0.942, 2.069)
+WIDTHS_MM = (35.2, 30.3, 17.8, 6.3)
+
+
+def test_the_300mm_preset_is_a_300mm_wafer_in_a_five_zone_membrane_head_with_a_ring_on_the_layered_stack():
+    c = Config.preset("300mm")
+    assert c.wafer_diameter == pytest.approx(0.3) and c.wafer_thickness == pytest.approx(775e-6)
+    assert c.carrier == "membrane" and c.zone_radii == pytest.approx((0.05, 0.10, 0.13, 0.145, 0.15))
+    assert c.retaining_ring_pressure == pytest.approx(3 * PSI) and c.pad_compliance == "layer"
+    # IC1000 on Suba IV: the defaults of the stack, with their sources
+    assert (c.pad_thickness, c.subpad_thickness) == (Config.default().pad_thickness, Config.default().subpad_thickness)
+    assert c.applied_pressure == pytest.approx(3 * PSI) and c.rotation_speed == pytest.approx(93 * 2 * 3.141592653589793 / 60)
+    assert c.wafer_speed_ratio == pytest.approx(87 / 93) and c.edge_exclusion == pytest.approx(3e-3)
+
+
+def test_presets_leave_zone_pressures_unset_so_applied_pressure_fills_every_zone():
+    c = Config.preset("300mm")
+    assert c.zone_pressures == () and "zone_pressures" not in PRESETS["300mm"]
+    assert c.zone_pressure_values == (c.applied_pressure,) * 5
+    lower = c.replace(applied_pressure="2 psi")
+    assert lower.zone_pressure_values == pytest.approx((2 * PSI,) * 5)
+    zoned = c.replace(zone_pressures="3,3,3.5,4,2 psi")
+    assert zoned.applied_pressure == pytest.approx(zone_mean_pressure(c.zone_radii, zoned.zone_pressure_values))
+
+
+def test_the_command_line_offers_every_preset_and_a_file_may_start_from_300mm(tmp_path):
+    assert tuple(PRESETS) == PRESET_NAMES
+    assert load_config(None, [], "300mm") == Config.preset("300mm")
+    path = tmp_path / "head.toml"
+    path.write_text('preset = "300mm"\n[process]\nretaining_ring_pressure = "4 psi"\n')
+    assert Config.from_toml(path).retaining_ring_pressure == pytest.approx(4 * PSI)
+    r = CliRunner().invoke(main, ["run", "--preset", "300mm", "--set", "carrier=rigid"])
+    assert r.exit_code == 2 and "zone_radii needs carrier = 'membrane'" in r.output
+    r = CliRunner().invoke(main, ["run", "--preset", "450mm"])
+    assert r.exit_code == 2 and "'300mm'" in r.output
+
+
+def test_the_ring_of_the_300mm_preset_is_refused_on_a_local_pad():
+    with pytest.raises(ValueError, match="retaining_ring_pressure = .* cannot act on the wafer with pad_compliance = 'winkler'"):
+        Config.preset("300mm").replace(pad_compliance="winkler")
+
+
+# ---- the preset solved (default grid: the layered pad finds no equilibrium on the coarse 300 mm grid; slow) ----
+
+
+@pytest.fixture(scope="module")
+def response():
+    """The zone response of the preset at uniform zones; its base solve is the preset's equilibrium."""
+    from cmpsim.zone_response import zone_response
+
+    return zone_response(Config.preset("300mm"))
+
+
+def _nonuniformity(profile, faces, edge_exclusion=3e-3):
+    from cmpsim.uniformity import uniformity
+
+    return uniformity(profile["rate"], 0.15, edge_exclusion, edges=faces)[0]
+
+
+@pytest.mark.slow
+def test_the_300mm_preset_makes_an_edge_band_inside_the_outer_10_mm(response):
+    """The profile's steepest changes lie in the outer 10 mm, and the rate there leaves the level
+    it has 10 mm inside the edge by more than the whole interior varies over any 10 mm."""
+    r, rate = response.profile["radius"], response.profile["rate"]
+    slope = np.abs(np.diff(rate) / np.diff(r))
+    assert np.all(r[1:][slope > 0.5 * slope.max()] > 0.14)
+    edge = r > 0.14
+    level = np.interp(0.14, r, rate)
+    band = np.abs(rate[edge] - level).max()
+    inner = r <= 0.14
+    interior = max(np.ptp(rate[inner & (r >= a) & (r <= a + 0.01)]) for a in np.arange(0.0, 0.13, 0.005))
+    assert band > 1.5 * interior
+    # the documented profile (docs/validation.md): the slow ring at 145 mm, the fast band 146-149 mm
+    assert _nonuniformity(response.profile, response.ring_faces) == pytest.approx(NONUNIFORMITY_3MM, abs=5e-5)
+
+
+@pytest.mark.slow
+def test_each_zones_response_and_its_width_at_each_boundary_are_as_documented(response):
+    """Not tuned: the numbers of docs/model.md 13f, computed here; the claim 'each zone moves the rate
+    mostly inside itself' is kept as the measured inside shares (see the docs for which zones meet it)."""
+    assert response.inside == pytest.approx(INSIDE_SHARES, abs=0.01)
+    assert response.gains == pytest.approx(GAINS, rel=0.02, abs=1e-3)
+    widths = [b.width for b in response.boundaries]
+    assert len(widths) == 4
+    assert [None if w is None else round(1e3 * w, 1) for w in widths] == pytest.approx(WIDTHS_MM, abs=0.2)
+
+
+@pytest.mark.slow
+def test_tune_zones_on_the_300mm_preset_flattens_below_a_third_and_below_1_percent_and_reproduces():
+    """Measured once: 3.105 % -> 0.645 % in 37 solves (81 min on a loaded 2-core machine), cold re-solve within 3e-9."""
+    import cmpsim
+
+    start = Config.preset("300mm")
+    tuned = cmpsim.tune_zones(start)
+    before = tuned.before["within_wafer_nonuniformity"]
+    assert tuned.within_wafer_nonuniformity < before / 3.0 and tuned.within_wafer_nonuniformity < 0.01
+    again = cmpsim.solve(start.replace(zone_pressures=tuned.zone_pressures), relative=False)
+    assert again.scalars["within_wafer_nonuniformity"] == pytest.approx(tuned.within_wafer_nonuniformity, abs=1e-6, rel=0)
