@@ -66,6 +66,7 @@ __all__ = [
     "CoupledLinearisation",
     "coupled_state",
     "coupled_jacobian",
+    "coupled_jacobian_and_pressure",
     "film_change",
     "local_deflection",
 ]
@@ -497,11 +498,21 @@ def _converged_state(problem, ev: _Evaluation, lin: CoupledLinearisation) -> Pre
 def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
     """d(residual)/du at a solved compliant state: implicit differentiation of (phi, w).
 
+    :func:`coupled_jacobian_and_pressure` without the pressure columns.
+    """
+    return coupled_jacobian_and_pressure(problem, st, rel_step)[0]
+
+
+def coupled_jacobian_and_pressure(problem, st, rel_step: float = 1e-6):
+    """(J, dP/du) at a solved compliant state: implicit differentiation of (phi, w).
+
     For each component of u the Reynolds residual and the local balance are differentiated at
     fixed (phi, w), and the coupled system is solved with the state's factorisation: three
     back-substitutions. The face coefficients depend on u only through the film on each face,
     so dR/du is the face-flux slopes of the linearisation times d(rigid film)/du on the faces
     (a finite difference of the geometry alone: no coefficient evaluation, no assembly).
+    J (3 x 3) is d(balance residuals)/du; dP/du (Pa per unit of each component of u, shape
+    (n_r, n_theta, 3)) the change of the total pressure along the same solution.
     """
     ops = _face_operators(problem.grid)
     lin, ev = st.coupling
@@ -512,13 +523,13 @@ def coupled_jacobian(problem, st, rel_step: float = 1e-6) -> np.ndarray:
         lin = _linearise(problem, ev, ops)  # the state converged on another position's factorisation
         st.coupling = (lin, ev)
         _memory(problem).lin = lin
-    J, dphi_du, dw_du = _position_columns(problem, lin, st.u, ops, rel_step)
+    J, dphi_du, dw_du, dP_du = _position_columns(problem, lin, st.u, ops, rel_step)
     shape = st.phi.shape
     _memory(problem).tangent = (
         st.u.copy(), st.phi.copy(), st.deflection.copy(),
         dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)),
     )
-    return J
+    return J, dP_du.reshape(shape + (3,))
 
 
 def film_change(problem, lin: CoupledLinearisation, dh, dhr, dha, ops):
@@ -533,27 +544,28 @@ def film_change(problem, lin: CoupledLinearisation, dh, dhr, dha, ops):
 
 
 def _position_columns(problem, lin: CoupledLinearisation, u, ops, rel_step: float = 1e-6):
-    """(J, dphi/du, dw/du) of the coupled system linearised in ``lin``, at position u.
+    """(J, dphi/du, dw/du, dP/du) of the coupled system linearised in ``lin``, at position u.
 
     For each component of u the Reynolds residual and the local balance are differentiated at
     fixed (phi, w) (the face-flux slopes of ``lin`` times d(rigid film)/du on the faces: a
     finite difference of the geometry alone) and the coupled system is solved with ``lin``'s
     factorisation: three back-substitutions. J (3 x 3) is d(balance residuals)/du along the
-    solution; dphi/du and dw/du are (cells, 3).
+    solution; dphi/du, dw/du and the total pressure's dP/du (Pa) are (cells, 3).
     """
     n = lin.P_phi.size
     J = np.empty((3, 3))
     dphi_du = np.empty((n, 3))
     dw_du = np.empty((n, 3))
+    dP_du = np.empty((n, 3))
     points = ((problem.xc, problem.yc), (problem.xr, problem.yr), (problem.xa, problem.ya))
     base = [_rigid_film(problem, u, x, y) for x, y in points]
     for k in range(3):
         du = np.zeros(3)
         du[k] = rel_step * problem.u_scale[k]
         dh, dhr, dha = (((_rigid_film(problem, u + du, x, y) - b) / du[k]).ravel() for (x, y), b in zip(points, base))
-        dP, dphi_du[:, k], dw_du[:, k] = film_change(problem, lin, dh, dhr, dha, ops)
-        J[:, k] = problem.carrier.residual_change(problem, dP.reshape(base[0].shape))
-    return J, dphi_du, dw_du
+        dP_du[:, k], dphi_du[:, k], dw_du[:, k] = film_change(problem, lin, dh, dhr, dha, ops)
+        J[:, k] = problem.carrier.residual_change(problem, dP_du[:, k].reshape(base[0].shape))
+    return J, dphi_du, dw_du, dP_du
 
 
 def _same_set(a, b) -> bool:

@@ -148,7 +148,7 @@ def joint_equilibrium(problem, u, tol: float = 1e-9, max_iter: int = 40, max_ste
 def _converged(problem, ev: _Evaluation, lin: CoupledLinearisation, cols, steps: int, history: list):
     """(u, state, steps, history) of the converged evaluation ``ev``; the tangent d(phi, w)/du kept for the next start."""
     st = _converged_state(problem, ev, lin)
-    _, dphi_du, dw_du = cols
+    _, dphi_du, dw_du, _ = cols
     shape = ev.phi.shape
     _memory(problem).tangent = (ev.u.copy(), ev.phi.copy(), ev.w.copy(), dphi_du.reshape(shape + (3,)), dw_du.reshape(shape + (3,)))
     return ev.u, st, steps, history
@@ -156,7 +156,7 @@ def _converged(problem, ev: _Evaluation, lin: CoupledLinearisation, cols, steps:
 
 def _joint_step(problem, ev: _Evaluation, F, lin: CoupledLinearisation, cols):
     """(du, dphi, dw) of the bordered Newton system of :func:`joint_equilibrium`."""
-    J, dphi_du, dw_du = cols
+    J, dphi_du, dw_du, _ = cols
     dphi0, dw0 = lin.solve(ev.R, ev.G)
     dP0 = lin.P_phi * dphi0 + lin.P_h * dw0
     du = -np.linalg.solve(J, F + problem.carrier.residual_change(problem, dP0.reshape(ev.phi.shape)))

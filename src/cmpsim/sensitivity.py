@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .compliance import _face_operators, _memory, _rigid_film, coupled_jacobian, film_change
+from .compliance import _face_operators, _memory, coupled_jacobian_and_pressure, film_change
 
 __all__ = ["film_response", "expect_film_change", "coupled_sensitivity"]
 
@@ -58,17 +58,7 @@ def coupled_sensitivity(problem, st, rel_step: float = 1e-6):
     J (3 x 3) is d(balance residuals)/du of :func:`cmpsim.compliance.coupled_jacobian` (which also
     keeps the tangent d(phi, w)/du for the next start); dP/du (Pa per unit of each component of u,
     shape (n_r, n_theta, 3)) the change of the total pressure along the same solution,
-    P_phi dphi/du + P_h (dh/du + dw/du), with dh/du the rigid film's (a finite difference of the
-    geometry at the cell centres, as the Jacobian's).
+    P_phi dphi/du + P_h (dh/du + dw/du), with dh/du the rigid film's: the columns the Jacobian's
+    back-substitutions give (:func:`cmpsim.compliance.coupled_jacobian_and_pressure`).
     """
-    J = coupled_jacobian(problem, st, rel_step)
-    lin = st.coupling[0]  # the factorisation the Jacobian used
-    _, _, _, dphi_du, dw_du = _memory(problem).tangent
-    base = _rigid_film(problem, st.u, problem.xc, problem.yc)
-    dP_du = np.empty(dphi_du.shape)
-    for k in range(3):
-        du = np.zeros(3)
-        du[k] = rel_step * problem.u_scale[k]
-        dh = (_rigid_film(problem, st.u + du, problem.xc, problem.yc) - base) / du[k]
-        dP_du[..., k] = (lin.P_phi * dphi_du[..., k].ravel() + lin.P_h * (dh + dw_du[..., k]).ravel()).reshape(base.shape)
-    return J, dP_du
+    return coupled_jacobian_and_pressure(problem, st, rel_step)
