@@ -239,9 +239,11 @@ def regularize_pressure_tensor(phi_xx, phi_xy, phi_yy, floor: float, continuatio
 
     The tensor keeps its eigenvectors; each eigenvalue below ``continuation`` is continued by
     :func:`continue_pressure_eigenvalues` (C1 in the film), then each eigenvalue below ``floor``
-    is raised to it. With ``continuation = 0`` only the floor acts (cmpsim
-    before 0.3.1: a kink where an eigenvalue meets the floor). This is the documented behaviour outside the validity
-    of the perturbation expansion: no non-positive diffusion coefficient reaches the Reynolds solver.
+    is raised to it. With ``continuation = 0`` only the floor acts (as before
+    ``flow_factor_continuation`` existed, and in the paper preset: a kink where an eigenvalue
+    meets the floor). This is the documented behaviour outside the validity of the perturbation
+    expansion of eq. 8-10 (``docs/model.md``, section 5): no non-positive diffusion coefficient
+    reaches the Reynolds solver.
 
     Returns
     -------
