@@ -390,8 +390,8 @@ def test_the_coarse_layered_default_converges_near_the_equal_ring_grid():
 
 
 def test_the_layered_default_converges_on_a_fine_grid_and_the_graded_presets_converge():
-    # 36x64 (as 48x64, the fine preset 48x128 and 64x128) did not converge with eq. 8 floored alone (the
-    # fold of the test below); continued below 0.4 every one does. Measured (docs/model.md, section 13c):
+    # 36x64 (as the coarse preset and 48x64) did not converge with eq. 8 floored alone (the fold of the
+    # tests below); continued below 0.4 every grid does. Measured (docs/model.md, section 13c):
     # rate 251.91, 243.82, 243.50 nm/min and non-uniformity 7.32, 6.74, 6.75 % on coarse, default, fine
     runs = {g: cmpsim.solve(Config.default().replace(grid=g, pad_compliance="layer"), relative=False) for g in ("coarse", "default", "fine", "36x64")}
     for g, r in runs.items():
