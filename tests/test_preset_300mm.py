@@ -100,7 +100,16 @@ def test_each_zones_response_and_its_width_at_each_boundary_are_as_documented(re
     assert [None if w is None else round(1e3 * w, 1) for w in widths] == pytest.approx(WIDTHS_MM, abs=0.2)
 
 
-# tune-zones on the preset is not tested here: on main after the layered pad's exact operator and the
-# membrane's Newton-Krylov bending met, it stops after about 7 min CPU with 'no Newton step of the bending
-# lowers its residual (8.94e-12 m)' at one iterate (tolerance about 5e-12 m), and a run that long does not
-# fit the suite's 10-minute budget (docs/limitations.md, 'Tuning the 300mm preset').
+@pytest.mark.slow
+def test_tune_zones_on_the_300mm_preset_flattens_below_a_third_and_below_1_percent_and_reproduces():
+    """The issue's criterion, measured (docs/model.md 13f): 3.72 % -> 0.25 % in 40 solves, about 1 min CPU;
+    the first trust-region step alone reaches 0.51 %. A cold solve at the returned pressures gives the
+    reported non-uniformity back to 1e-6."""
+    import cmpsim
+
+    start = Config.preset("300mm")
+    tuned = cmpsim.tune_zones(start)
+    before = tuned.before["within_wafer_nonuniformity"]
+    assert tuned.within_wafer_nonuniformity < before / 3.0 and tuned.within_wafer_nonuniformity < 0.01
+    again = cmpsim.solve(start.replace(zone_pressures=tuned.zone_pressures), relative=False)
+    assert again.scalars["within_wafer_nonuniformity"] == pytest.approx(tuned.within_wafer_nonuniformity, abs=1e-6, rel=0)

@@ -247,7 +247,7 @@ class MembraneCarrier(RigidCarrier):
             du = -np.linalg.solve(J, self.residual_change(problem, dP))  # the rigid body re-balanced
             return dP + dP_du @ du, du
 
-        def equilibrium(w):
+        def equilibrium(w, rebalance=True):
             w = np.array(w, dtype=float, copy=True)
             if np.array_equal(w, last["w"]):  # the bending of the last equilibrium (the start): solved already
                 return last["sol"].state
@@ -256,13 +256,18 @@ class MembraneCarrier(RigidCarrier):
                 guess = guess + balanced_response(w - last["w"], expect=True)[1]
             self.bending = (grid, w)
             last["solves"] += 1
-            last["sol"] = solve(problem, start=guess, **options)
+            last["sol"] = solve(problem, start=guess, rebalance=rebalance, **options)
             last["iterations"] += last["sol"].iterations
             last["w"], last["lin"] = w, None
             return last["sol"].state
 
         def response(w, dw):
             return balanced_response(np.asarray(dw, dtype=float).reshape(shape))[0]
+
+        def trial(w):
+            """The equilibrium at a trial bending of a Newton step: a position the linearised balance puts far
+            from load balance means a step too long for the linearisation, cheaper halved than bracketed."""
+            return equilibrium(w, rebalance=False)
 
         tol = 1e3 * options.get("tol", 1e-9) * problem.sigma
         target = self.back_pressure(grid)
@@ -273,7 +278,7 @@ class MembraneCarrier(RigidCarrier):
         def bend(ramp, w):
             nonlocal krylov
             for share in ramp:
-                bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol, response, start=w)
+                bent = solve_bending(equilibrium, self.plate, grid, mean + share * (target - mean), stiffness, tol, response, start=w, trial=trial)
                 w, krylov = bent.deflection, krylov + bent.krylov
             return w
 
