@@ -217,6 +217,13 @@ def test_the_default_slurry_takes_a_zones_extra_load_and_the_contact_falls_every
     rate = np.asarray(base.profiles["removal_rate_profile"])
     change = np.asarray(up.profiles["removal_rate_profile"]) / rate - 1
     assert np.all(change < 0)  # the abrasive removal follows the contact: down everywhere
+    # the level: where the slurry pressure is ambient (the rim) the contact takes the whole change of the
+    # total pressure, which is the plate's on the bed of the pad alone (the film, held uniform, bypasses
+    # the summits): Hetenyi's negative lobe 20 mm outside zone 3's boundary at 130 mm
+    d, k_pad = base.problem.carrier.plate.bending_stiffness, base.problem.foundation.stiffness
+    rim = k_pad * (winkler_step_load(r[-1:], 0.13, 1.0, 0.15, d, 0.28, k_pad) - winkler_step_load(r[-1:], 0.10, 1.0, 0.15, d, 0.28, k_pad))[0]
+    assert rim < -0.1
+    assert contact[-1] == pytest.approx(rim, abs=0.004) and (ring_mean(u.p_total - b.p_total) / dp)[-1] == pytest.approx(rim, abs=0.004)
     relative_contact = ring_mean(u.p_contact - b.p_contact) / ring_mean(b.p_contact)
     assert change == pytest.approx(relative_contact, rel=0.05)  # the rate's elasticity to the contact is about 1
 
