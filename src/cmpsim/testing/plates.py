@@ -13,8 +13,8 @@ Both satisfy D del^4 w + k w = q on r < a with the free-edge conditions M_r = V_
   Evaluated with mpmath at 30 digits.
 * :func:`winkler_step_load`: a plate on a Winkler foundation k under the axisymmetric step load q on
   r < b (a membrane zone, or every zone inside a boundary, raised by q): the circular-plate form of
-  Hetenyi's beam under a load on a half-line (M. Hetenyi, *Beams on Elastic Foundation*, 1946,
-  ch. II; Timoshenko & Woinowsky-Krieger, section 57 for the plate). w = q/k + c J_0(kappa r) for
+  Hetenyi's beam under a load on a half-line (M. Hetenyi, *Beams on Elastic Foundation*, 1946;
+  Timoshenko & Woinowsky-Krieger, ch. 8, for plates on a foundation). w = q/k + c J_0(kappa r) for
   r < b, c1 J_0(kappa r) + c2 Y_0(kappa r) for b < r < a (real parts, complex c: the Kelvin
   functions ber, bei, ker, kei); w, w', del^2 w and (del^2 w)' continuous at b (the load jumps,
   the plate's shear does not), M_r = V_r = 0 at a. Far from both b and a the foundation pressure
