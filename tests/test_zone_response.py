@@ -245,3 +245,47 @@ def test_with_a_thin_slurry_the_zones_steer_their_own_rate():
     assert default.gains[2] < 0 and max(default.contrast) < 0.2
     assert min(thin.contrast) > 0.5
     assert default.load_stiffness == pytest.approx(thin.load_stiffness, rel=1e-3)  # the film adds no stiffness to a uniform approach
+
+
+def test_the_numbers_of_the_model_document_on_the_winkler_head():
+    """docs/model.md 13f ('Why the zones spread', 'Why zone 3 moves its rate the wrong way'), computed."""
+    thin, default = zone_response(_winkler_head(slurry_viscosity=1e-6)), zone_response(_winkler_head())
+    assert [round(1e3 * b.width, 1) for b in thin.boundaries] == [24.6, 22.3, 16.1, 7.8]
+    assert np.round(thin.inside, 2).tolist() == [0.84, 0.88, 0.74, 0.57, 0.45]
+    assert np.round(thin.contrast, 2).tolist() == [0.87, 0.81, 0.71, 0.52, 0.57]
+    assert np.round(default.contrast, 2).tolist() == [0.13, 0.05, 0.03, 0.06, 0.07]
+    assert round(default.load_stiffness / 1e9, 3) == 1.605 and round(1e3 * default.bending_length, 2) == 7.64
+    # the closed form on 0.5 mm rings
+    faces = np.linspace(0.0, 0.15, 301)
+    centres = 0.5 * (faces[1:] + faces[:-1])
+    d, k = default.bending_stiffness, default.load_stiffness
+    steps = [np.zeros_like(centres)] + [k * winkler_step_load(centres, b, 1.0, 0.15, d, 0.28, k) for b in RADII]
+    exact = np.stack([hi - lo for lo, hi in zip(steps[:-1], steps[1:])], axis=1)
+    assert [round(1e3 * b.width, 1) for b in boundary_widths(exact, centres, faces, RADII)] == [24.4, 22.3, 16.1, 7.8]
+    assert np.round(inside_share(exact, centres, faces, RADII), 2).tolist() == [0.85, 0.85, 0.75, 0.59, 0.48]
+    # the rim's contact change per zone, and the plate's on the pad's bed there
+    head = _winkler_head()
+    run = ZoneSolver(head)
+    p = np.array(head.zone_pressure_values)
+    base = run(p)
+    run.adopt(base)
+    k_pad, rim = base.problem.foundation.stiffness, np.asarray(base.profiles["radius"])[-1:]
+    solved, plate = [], []
+    for zone, (lo, hi) in enumerate(zip((0.0,) + RADII[:-1], RADII)):
+        raised = p.copy()
+        raised[zone] *= 1.02
+        up = run(raised)
+        solved.append(ring_mean(up.solution.state.p_contact - base.solution.state.p_contact)[-1] / (raised[zone] - p[zone]))
+        plate.append(k_pad * (winkler_step_load(rim, hi, 1.0, 0.15, d, 0.28, k_pad) - winkler_step_load(rim, lo, 1.0, 0.15, d, 0.28, k_pad))[0])
+    assert np.round(solved, 3).tolist() == [0.0, 0.006, -0.18, 0.434, 0.739]
+    assert np.round(plate, 3).tolist() == [-0.0, 0.007, -0.18, 0.438, 0.735]
+
+
+def test_the_three_inch_default_head_behaves_alike():
+    """docs/model.md 13f: four zones at 3 in; the inner zones hardly move their rate and the rim zone moves
+    the wafer's level with the default slurry, every zone steers its own rate without its hydrodynamic stiffness."""
+    head = Config.default().replace(carrier="membrane", zone_radii="10,20,30,38.1 mm")
+    default, thin = zone_response(head), zone_response(head.replace(slurry_viscosity=1e-6))
+    assert np.round(default.gains, 2).tolist() == [0.04, -0.0, 0.01, 1.09]
+    assert np.round(thin.gains, 2).tolist() == [0.65, 0.6, 0.63, 0.86]
+    assert round(1e3 * default.bending_length, 1) == 4.5
