@@ -174,8 +174,10 @@ def load_stiffness(result) -> float:
 
     The change of the wafer's mean face pressure when the whole wafer moves towards the pad, from
     the equilibrium's own linearisation (the pad model's ``sensitivity``: pad, asperity contact and
-    slurry together); the foundation stiffness of the plate-on-foundation picture, the one that
-    preconditions the membrane's bending (:meth:`cmpsim.models.carriers.MembraneCarrier.equilibrium`).
+    slurry together); the foundation stiffness of the plate-on-foundation picture. Measured as the
+    membrane carrier measures the stiffness that preconditions its bending
+    (:meth:`cmpsim.models.carriers.MembraneCarrier.equilibrium`), but at ``result``'s bent
+    equilibrium, not at the rigid-body start (300mm preset: 1.29e9 against 1.17e9 Pa/m).
     """
     problem, state = result.problem, result.solution.state
     _, dp_du = problem.pad_model.sensitivity(problem, state)
