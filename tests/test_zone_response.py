@@ -95,6 +95,13 @@ def test_the_measured_response_matches_a_finite_difference_of_two_solves():
     assert len(out["zone_response_width"]) == 1 and out["units"]["response"] == "m/s/Pa"
 
 
+def test_a_single_zone_has_no_contrast_and_says_so_in_json():
+    rate = 1e-9 * np.ones_like(CENTRES)
+    assert math.isnan(contrast_gains(np.ones((CENTRES.size, 1)), rate, FACES, CENTRES, (0.15,), (2e4,))[0])
+    resp = zone_response(Config.default().replace(carrier="membrane", grid="coarse"))
+    assert resp.to_dict()["zone_response_contrast"] == [None]
+
+
 def test_the_contrast_gain_ignores_a_change_common_to_the_wafer_and_equals_the_local_gain_of_a_local_zone():
     edges = (0.0,) + RADII
     pressures = (2e4, 2.1e4, 2.2e4, 2.3e4, 2.4e4)

@@ -313,7 +313,7 @@ class ZoneResponse:
             "zone_response_inside": list(self.inside),
             "zone_response_gain": list(self.gains),
             "zone_response_width": [b.to_dict() for b in self.boundaries],
-            "zone_response_contrast": list(self.contrast),
+            "zone_response_contrast": [None if np.isnan(c) else c for c in self.contrast],  # None: nothing outside the zone
             "load_stiffness": self.load_stiffness,
             "bending_length": self.bending_length,
             "units": {"zone_radii": "m", "zone_pressures": "Pa", "radius": "m", "rate": "m/s", "response": "m/s/Pa",
