@@ -107,9 +107,9 @@ def test_each_zones_response_and_its_width_at_each_boundary_are_as_documented(re
 
 @pytest.mark.slow
 def test_the_contrast_gains_and_the_bending_length_of_the_preset_are_as_documented(response):
-    assert np.round(response.contrast, 2).tolist() == list(CONTRASTS)
+    assert response.contrast == pytest.approx(CONTRASTS, abs=0.0051)
     assert response.load_stiffness == pytest.approx(LOAD_STIFFNESS, rel=5e-3)
-    assert round(1e3 * response.bending_length, 2) == BENDING_LENGTH_MM
+    assert 1e3 * response.bending_length == pytest.approx(BENDING_LENGTH_MM, abs=0.0051)
 
 
 @pytest.mark.slow
@@ -118,11 +118,11 @@ def test_without_the_slurrys_hydrodynamic_stiffness_the_preset_zones_steer_their
     from cmpsim.zone_response import zone_response
 
     thin = zone_response(Config.preset("300mm").replace(slurry_viscosity=1e-6))
-    assert [round(1e3 * b.width, 1) for b in thin.boundaries] == [24.5, 22.1, 16.0, 7.2]
-    assert np.round(thin.inside, 2).tolist() == [0.84, 0.89, 0.74, 0.55, 0.54]
-    assert np.round(thin.gains, 2).tolist() == [0.89, 0.85, 0.8, 0.6, 0.65]
+    assert [1e3 * b.width for b in thin.boundaries] == pytest.approx([24.5, 22.1, 16.0, 7.2], abs=0.051)
+    assert thin.inside == pytest.approx([0.84, 0.89, 0.74, 0.55, 0.54], abs=0.0051)
+    assert thin.gains == pytest.approx([0.89, 0.85, 0.8, 0.6, 0.65], abs=0.0051)
     # the response starts 11-13 mm inside the inner three boundaries (Lee, Lee & Jeong: 10-15 mm)
-    assert [round(1e3 * (b.boundary - b.start)) for b in thin.boundaries[:3]] == [13, 13, 11]
+    assert [1e3 * (b.boundary - b.start) for b in thin.boundaries[:3]] == pytest.approx([13, 13, 11], abs=0.51)
 
 
 # tune-zones on the preset is not tested here: on main after the layered pad's exact operator and the
