@@ -32,8 +32,8 @@ def groove_venting(pitch: float, width: float) -> float:
 
     ``pitch`` (m): groove pitch, 0 for an ungrooved pad (returns 0.0); ``width`` (m): groove
     width, 0 <= width < pitch. The homogenised pitch-mean pressure of lands of length
-    L = pitch - width between grooves at ambient pressure (Thakurta et al., J. Electrochem.
-    Soc. 149, G126, 2002, solve the grooved film itself; this is its wafer-scale limit).
+    L = pitch - width between grooves at ambient pressure (derived in ``docs/model.md``,
+    "Grooved pad: venting of the film", from the exact land solution).
     Raises ValueError if the inputs are not finite, negative, or width >= pitch > 0.
     """
     if not (math.isfinite(pitch) and math.isfinite(width) and pitch >= 0 and width >= 0):
