@@ -16,7 +16,7 @@ from cmpsim import Config
 from cmpsim.grid import PolarGrid
 from cmpsim.grooves import groove_venting
 from cmpsim.model import build_problem
-from cmpsim.reynolds import FaceCoefficients, ReynoldsSystem
+from cmpsim.testing.checks import central_difference_jacobian, manufactured_errors
 from cmpsim.testing.lubrication import plane_slider_load
 
 R = 0.0381
@@ -106,20 +106,7 @@ def _manufactured(kappa2):
 
 
 def _solve_mms(fun, n, kappa2, edge_ratio):
-    g = PolarGrid(R, n, 4 * n, edge_ratio, R / 4 if edge_ratio > 1 else 0.0)
-
-    def coeffs(x, y):
-        dxx, dxy, dyy, _, _ = fun(x, y)
-        z = np.zeros_like(x)
-        return (dxx + z, dxy + z, dyy + z, z, z)
-
-    xr, yr, _ = g.radial_faces
-    xa, ya, _ = g.angular_faces
-    c = FaceCoefficients(coeffs(xr, yr), coeffs(xa, ya), venting=kappa2)
-    xc, yc = g.centres
-    phi = ReynoldsSystem(g, c, source=fun(xc, yc)[3] * g.area).solve()
-    exact = fun(xc, yc)[4]
-    return np.max(np.abs(phi - exact)), np.sqrt(g.integrate((phi - exact) ** 2) / (np.pi * R * R))
+    return manufactured_errors(fun, PolarGrid(R, n, 4 * n, edge_ratio, R / 4 if edge_ratio > 1 else 0.0), kappa2)
 
 
 @pytest.mark.parametrize("edge_ratio", [1.0, 6.0], ids=["uniform-rings", "edge-graded-rings"])
@@ -174,11 +161,7 @@ def test_grooved_coupled_jacobian_matches_central_differences(compliance):
     u = solved.solution.state.u + np.array([0.05, 0.3, -0.2]) * problem.u_scale
     st = problem.state(u)
     J = problem.jacobian(st)
-    fd = np.empty((3, 3))
-    for k in range(3):
-        du = np.zeros(3)
-        du[k] = 1e-4 * problem.u_scale[k]
-        fd[:, k] = (problem.state(u + du).residual - problem.state(u - du).residual) / (2 * du[k])
+    fd = central_difference_jacobian(problem, u)
     scale = np.max(np.abs(fd), axis=0)
     assert np.max(np.abs(J - fd) / scale) < 1e-4, (J, fd)
 

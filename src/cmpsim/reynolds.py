@@ -320,10 +320,9 @@ def venting_map(grid: PolarGrid) -> _VentingMap:
     vm = _VENT_MAPS.get(grid)
     if vm is not None:
         return vm
-    n_r, n_t, N = grid.n_r, grid.n_theta, grid.size
-    i = np.repeat(np.arange(n_r), n_t)
-    j = np.tile(np.arange(n_t), n_r)
-    P = grid.index(i, j)
+    N = grid.size
+    i, j = (a.ravel() for a in np.indices((grid.n_r, grid.n_theta)))
+    P = np.arange(N)  # = grid.index(i, j)
     area = grid.area.ravel()
     n_radial = np.where(i > 0, 2.0, 1.0)  # the centre's cells have no inner face
     rows = [P, P[i > 0], P, P]
