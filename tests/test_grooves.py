@@ -176,3 +176,24 @@ def test_groove_inputs_are_checked_and_the_default_is_ungrooved():
         Config.default().replace(cavitation="jfo", **K_GROOVE)
     with pytest.raises(ValueError, match="pad_groove_pitch"):
         Config.default().replace(pad_groove_pitch="-1 mm")
+
+
+# ------------------------------------------------------------------------------ the 300mm preset, grooved
+# Measured (docs/model.md 13g; default grid): not tuned, the numbers the documentation quotes.
+GROOVED_300MM_NONUNIFORMITY = 0.00785
+GROOVED_300MM_INSIDE = (0.842, 0.883, 0.729, 0.542, 0.555)
+GROOVED_300MM_WIDTHS_MM = (25.1, 22.7, 16.2, 7.3)
+
+
+@pytest.mark.slow
+def test_grooved_300mm_preset_zones_move_the_rate_mostly_inside_themselves():
+    from cmpsim.uniformity import uniformity
+    from cmpsim.zone_response import zone_response
+
+    response = zone_response(Config.preset("300mm").replace(**K_GROOVE))
+    nonuniformity = uniformity(response.profile["rate"], 0.15, 3e-3, edges=response.ring_faces)[0]
+    assert nonuniformity == pytest.approx(GROOVED_300MM_NONUNIFORMITY, abs=5e-5)
+    assert response.inside == pytest.approx(GROOVED_300MM_INSIDE, abs=0.01)
+    assert min(response.inside) > 0.5  # issue 25's "mostly inside", measured with the grooves
+    widths = [round(1e3 * b.width, 1) for b in response.boundaries]
+    assert widths == pytest.approx(GROOVED_300MM_WIDTHS_MM, abs=0.2)
