@@ -15,6 +15,11 @@ NONUNIFORMITY_3MM = 0.03722
 INSIDE_SHARES = (0.307, 0.495, 0.331, 0.221, 0.074)
 GAINS = (0.205, 0.063, -0.508, 0.945, 2.094)
 WIDTHS_MM = (35.8, 30.6, 17.7, 7.1)
+# the contrast gain (the zone's rate against the rest of the wafer), the load stiffness (Pa/m) and the
+# wafer's bending length (mm) of the same response (docs/model.md 13f, 'Why zone 3 moves its rate the wrong way')
+CONTRASTS = (0.15, 0.03, -0.05, 0.19, 0.37)
+LOAD_STIFFNESS = 1.29e9
+BENDING_LENGTH_MM = 8.07
 
 
 def test_the_300mm_preset_is_a_300mm_wafer_in_a_five_zone_membrane_head_with_a_ring_on_the_layered_stack():
@@ -98,6 +103,26 @@ def test_each_zones_response_and_its_width_at_each_boundary_are_as_documented(re
     widths = [b.width for b in response.boundaries]
     assert len(widths) == 4
     assert [None if w is None else round(1e3 * w, 1) for w in widths] == pytest.approx(WIDTHS_MM, abs=0.2)
+
+
+@pytest.mark.slow
+def test_the_contrast_gains_and_the_bending_length_of_the_preset_are_as_documented(response):
+    assert response.contrast == pytest.approx(CONTRASTS, abs=0.0051)
+    assert response.load_stiffness == pytest.approx(LOAD_STIFFNESS, rel=5e-3)
+    assert 1e3 * response.bending_length == pytest.approx(BENDING_LENGTH_MM, abs=0.0051)
+
+
+@pytest.mark.slow
+def test_without_the_slurrys_hydrodynamic_stiffness_the_preset_zones_steer_their_own_rate():
+    """docs/model.md 13f: the layered preset with the slurry 5000 times thinner; the plate's step on its bed."""
+    from cmpsim.zone_response import zone_response
+
+    thin = zone_response(Config.preset("300mm").replace(slurry_viscosity=1e-6))
+    assert [1e3 * b.width for b in thin.boundaries] == pytest.approx([24.5, 22.1, 16.0, 7.2], abs=0.051)
+    assert thin.inside == pytest.approx([0.84, 0.89, 0.74, 0.55, 0.54], abs=0.0051)
+    assert thin.gains == pytest.approx([0.89, 0.85, 0.8, 0.6, 0.65], abs=0.0051)
+    # the response starts 11-13 mm inside the inner three boundaries (Lee, Lee & Jeong: 10-15 mm)
+    assert [1e3 * (b.boundary - b.start) for b in thin.boundaries[:3]] == pytest.approx([13, 13, 11], abs=0.51)
 
 
 @pytest.mark.slow
