@@ -183,6 +183,7 @@ def test_groove_inputs_are_checked_and_the_default_is_ungrooved():
 GROOVED_300MM_NONUNIFORMITY = 0.00785
 GROOVED_300MM_INSIDE = (0.842, 0.883, 0.729, 0.542, 0.555)
 GROOVED_300MM_WIDTHS_MM = (25.1, 22.7, 16.2, 7.3)
+GROOVED_300MM_CONTRASTS = (0.868, 0.803, 0.700, 0.498, 0.757)
 
 
 @pytest.mark.slow
@@ -195,5 +196,6 @@ def test_grooved_300mm_preset_zones_move_the_rate_mostly_inside_themselves():
     assert nonuniformity == pytest.approx(GROOVED_300MM_NONUNIFORMITY, abs=5e-5)
     assert response.inside == pytest.approx(GROOVED_300MM_INSIDE, abs=0.01)
     assert min(response.inside) > 0.5  # issue 25's "mostly inside", measured with the grooves
+    assert response.contrast == pytest.approx(GROOVED_300MM_CONTRASTS, abs=0.01)
     widths = [round(1e3 * b.width, 1) for b in response.boundaries]
     assert widths == pytest.approx(GROOVED_300MM_WIDTHS_MM, abs=0.2)
