@@ -1,6 +1,6 @@
 """Grooved pad: the homogenised venting of the slurry film by grooves at ambient pressure.
 
-A pad with concentric grooves (IC1000's K-groove) holds, in each groove deep compared with
+A pad with concentric grooves (IC1000 is sold K-grooved) holds, in each groove deep compared with
 the film, the slurry at ambient pressure. Over a land of length L = pitch - width between two
 grooves the film pressure obeys the Reynolds equation with p = p_a at both ends; on the
 wafer's scale, much longer than the pitch, the pressure averaged over one pitch obeys the
@@ -12,7 +12,8 @@ with g the film's conductance (h^3 / (12 eta) Phi^p for the Newtonian slurry) an
 Couette flux. The coefficient is the one that makes the pitch mean of the exact land
 solution, p = S x (x - L) / (2 g) for a uniform source S, mean -S L^3 / (12 g pitch) (the
 groove at p_a), the homogenised answer -S / (g kappa^2); the land's lowest decay mode,
-kappa^2 = pi^2 / L^2, would over-vent by 12 / pi^2 - 1 = 21.6 % (``tests/test_grooves.py``).
+kappa^2 = pi^2 / L^2, would under-vent: 12 / pi^2 = 1.216 times the exact land mean
+(``tests/test_grooves.py``).
 The same holds for the granular slurry in its unknown ln(p/p0), which is 0 at the grooves.
 """
 
