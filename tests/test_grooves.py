@@ -35,7 +35,7 @@ def test_venting_coefficient_is_the_pitch_mean_of_the_exact_land_solution():
     exact_mean = np.trapezoid(p, x) / pitch  # the groove holds p = 0
     kappa2 = groove_venting(pitch, width)
     assert -S / (g * kappa2) == pytest.approx(exact_mean, rel=1e-9)
-    # the land's lowest decay mode pi / L (and no groove area) would over-vent: 12 / pi^2 - 1 = 21.6 % low
+    # the land's lowest decay mode pi / L (and no groove area) would under-vent: 12 / pi^2 = 1.216 times the land mean
     assert (-S / (g * np.pi**2 / land**2)) / (exact_mean * pitch / land) == pytest.approx(12.0 / np.pi**2, rel=1e-9)
     assert groove_venting(0.0, 0.0) == 0.0
 
