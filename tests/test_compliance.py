@@ -28,6 +28,7 @@ from cmpsim.grid import PolarGrid
 from cmpsim.padgrid import layer_deflection, layer_operator
 from cmpsim.model import build_problem
 from cmpsim.setup import pad_foundation
+from cmpsim.testing.checks import central_difference_jacobian
 
 COMPLIANT = {"pad_compliance": "winkler"}
 LAYER = {"pad_compliance": "layer"}
@@ -221,11 +222,7 @@ def test_equilibrium_jacobian_includes_the_compliance_central_difference(model, 
     u = sol_u + np.array([0.05, 0.3, -0.2]) * problem.u_scale  # off equilibrium
     st = problem.state(u)
     J = problem.jacobian(st)
-    fd = np.empty((3, 3))
-    for k in range(3):
-        du = np.zeros(3)
-        du[k] = 1e-4 * problem.u_scale[k]
-        fd[:, k] = (problem.state(u + du).residual - problem.state(u - du).residual) / (2 * du[k])
+    fd = central_difference_jacobian(problem, u)
     scale = np.max(np.abs(fd), axis=0)
     assert np.max(np.abs(J - fd) / scale) < 1e-4, (J, fd)
     # a rigid pad at the same position has a much stiffer load response: the compliance is in J

@@ -182,3 +182,14 @@ def test_invalid_dome_height_or_wafer_radius_raises_value_error_naming_it(dome, 
         film_thickness_1d(0.0, H0, 0.0, dome, r_w)
     with pytest.raises(ValueError, match=name):
         film_thickness(0.0, 0.0, H0, 0.0, dome, r_w)
+
+
+@pytest.mark.parametrize("angles", [(2.0, 1.2), (1.0, 1.0), (float("nan"), 0.0)])
+def test_a_tilt_with_no_wafer_axis_is_refused_naming_both_angles_not_a_nan_film(angles):
+    """A Newton trial far off (seen in the membrane's bending) once gave a NaN film and a numpy warning."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ValueError, match="attack_angle and cross_tilt must satisfy"):
+            film_thickness(np.zeros(3), np.zeros(3), 1e-6, angles[0], 5e-6, 0.0381, cross_tilt=angles[1])

@@ -58,3 +58,17 @@ def test_raising_the_ring_pressure_lowers_the_edge_rate_monotonically():
     # docs/model.md, section 13f: the non-uniformity has a minimum near 4 psi (0.084, 0.088 at 0 and 2 psi
     # with eq. 8 floored alone, before it was continued below 0.4: docs/model.md, section 5)
     assert wiwnu == pytest.approx([0.067, 0.051, 0.0125, 0.038], abs=0.002)
+
+
+def test_the_rings_table_is_the_hankel_integral_to_a_millionth_under_the_whole_wafer():
+    """The cached cubic spline of :func:`ring_table` (128 radii graded to the edge) against the
+    integral itself at radii off its nodes, on the 300mm preset's pad and ring."""
+    from cmpsim.models.carriers import ring_of, ring_table
+
+    cfg = Config.preset("300mm")
+    foundation, ring, radius = pad_foundation(cfg), ring_of(cfg), 0.5 * cfg.wafer_diameter
+    r = np.concatenate([np.linspace(0.0, radius, 37)[1:-1], radius - np.geomspace(1e-5, 1e-2, 23)])
+    exact = foundation.annulus_deflection(r, *ring)
+    assert np.max(np.abs(exact)) > 1e-6  # the ring lowers the pad under the edge by microns
+    assert np.max(np.abs(ring_table(foundation, radius, ring)(r) - exact)) < 1e-6 * np.max(np.abs(exact))
+    assert ring_table(foundation, radius, ring) is ring_table(foundation, radius, ring)  # one table per pad, wafer, ring

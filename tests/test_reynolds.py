@@ -6,6 +6,7 @@ import sympy
 
 from cmpsim.grid import PolarGrid
 from cmpsim.reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator
+from cmpsim.testing.checks import manufactured_errors
 
 R = 0.0381
 X, Y = sympy.symbols("x y")
@@ -26,23 +27,7 @@ def _manufactured(anisotropy: float):
 def _solve_mms(fun, n, edge_ratio=1.0):
     """Errors (max, L2) on n rings x 4n sectors; ``edge_ratio`` > 1: rings graded towards the edge (rim
     rings edge_ratio times narrower, widening over R/4), the same map at every n."""
-    g = PolarGrid(R, n, 4 * n, edge_ratio, R / 4 if edge_ratio > 1 else 0.0)
-
-    def coeffs(x, y):
-        dxx, dxy, dyy, _, _ = fun(x, y)
-        z = np.zeros_like(x)
-        return (dxx + z, dxy + z, dyy + z, z, z)
-
-    xr, yr, _ = g.radial_faces
-    xa, ya, _ = g.angular_faces
-    c = FaceCoefficients(coeffs(xr, yr), coeffs(xa, ya))
-    xc, yc = g.centres
-    source = fun(xc, yc)[3] * g.area
-    phi = ReynoldsSystem(g, c, source=source).solve()
-    exact = fun(xc, yc)[4]
-    err_max = np.max(np.abs(phi - exact))
-    err_l2 = np.sqrt(g.integrate((phi - exact) ** 2) / (np.pi * R * R))
-    return err_max, err_l2
+    return manufactured_errors(fun, PolarGrid(R, n, 4 * n, edge_ratio, R / 4 if edge_ratio > 1 else 0.0))
 
 
 @pytest.mark.parametrize(

@@ -124,6 +124,9 @@ PARAMETERS: dict[str, Param] = {
         _P("subpad_thickness", "pad", "t_2", "m", "mm", 1.27e-3, "Thickness of the subpad (0 = no subpad)", "Suba IV sub-pad, 50 mil as commonly stacked under IC1000 (assumed: no datasheet found); see docs/model.md", 0.0, None, False),
         _P("subpad_modulus", "pad", "E_2s", "Pa", "MPa", 2.3e6, "Young's modulus of the subpad", "Order of magnitude of a Suba IV-class felt: 2.29 MPa soft-pad layer of Wang et al., JES 144, 1121 (1997), as used by Lo & Lin, J. Mater. Process. Technol. 168, 250 (2005) (second-hand); see docs/model.md", 0.0),
         _P("subpad_poisson", "pad", "nu_2s", "", "", 0.1, "Poisson ratio of the subpad", "Wang et al. (1997) via Lo & Lin (2005) (second-hand): 0.1 for the soft pad layer", 0.0, 0.5, False, True),
+        # grooves of the pad (docs/model.md, 13g "Grooved pad: venting of the film")
+        _P("pad_groove_pitch", "pad", "lambda_g", "m", "mm", 0.0, "Pitch of the pad's concentric grooves (0 = ungrooved): grooves at ambient pressure vent the slurry film over each land", "0 = the smooth pad of the paper; concentric grooves of CMP pads: about 0.12 in = 3.05 mm (0.09-0.24 in; Applied Materials patent claims, docs/model.md 13g); IC1000's K-groove dimensions are not published", 0.0, None, False),
+        _P("pad_groove_width", "pad", "w_g", "m", "mm", 0.0, "Width of the pad's grooves (land = pitch - width), in [0, pitch); 0 with pitch 0", "About 0.02 in = 0.51 mm (0.015-0.04 in; same patent claims, docs/model.md 13g)", 0.0, None, False),
         _P("friction_coefficient", "pad", "mu", "", "", 0.4, "Coulomb friction of pad summits on the wafer", "Lai, PhD thesis MIT (2001): 0.40-0.49 in contact mode", 0.0, None, False),
         # ---------------------------------------------------------------- numerics
         _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
@@ -216,6 +219,21 @@ def _check_consistency(c: "Config") -> None:
             "solids_loading = 0 leaves the granular slurry without grains (its pressure is that of the grains): valid range "
             "(0, 0.6) with slurry_model = 'granular' and granular_density = 0, or set granular_density > 0"
         )
+
+def _check_grooves(c: "Config") -> None:
+    """Refuse groove inputs without a land, or with the mass-conserving cavitation, naming the parameters."""
+    pitch, width = c.pad.pad_groove_pitch, c.pad.pad_groove_width
+    if pitch == 0 and width > 0:
+        raise ValueError(f"pad_groove_width = {width:g} m needs pad_groove_pitch > 0 (got 0: an ungrooved pad); set both or neither")
+    if pitch > 0 and width >= pitch:
+        raise ValueError(f"pad_groove_width must be in [0, pad_groove_pitch) = [0, {pitch:g}) m (a land must remain); got {width:g} m")
+    if pitch > 0 and c.slurry.slurry_model == "newtonian" and c.slurry.cavitation == "jfo":
+        raise ValueError(
+            "pad_groove_pitch > 0 (a grooved pad) cannot be combined with cavitation = 'jfo': the grooves' homogenised venting "
+            "to ambient pressure is not part of the JFO mass balance in cmpsim (docs/model.md, 'Grooved pad'); "
+            "use cavitation = 'gumbel' or 'none', or pad_groove_pitch = 0"
+        )
+
 
 def _check_carrier(c: "Config") -> None:
     """Refuse zone and ring inputs that the chosen carrier and pad cannot honour, naming the parameters."""
@@ -339,6 +357,7 @@ class Config:
             groups.setdefault(PARAMETERS[name].section, {})[name] = v
         new = Config(**{s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS})
         _check_carrier(new)
+        _check_grooves(new)
         if new.process.zone_pressures:
             new = _with_zone_load(new, overrides)
         _check_consistency(new)

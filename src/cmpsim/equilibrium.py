@@ -88,6 +88,7 @@ def solve_equilibrium(
     max_iter: int = 40,
     max_step: float = 0.5,
     warm_start: bool | None = None,
+    rebalance: bool = True,
 ) -> EquilibriumSolution:
     """Newton iteration on (h0, theta, beta) with trust region and backtracking.
 
@@ -113,6 +114,11 @@ def solve_equilibrium(
         are counted in ``factorizations``. Otherwise, for the contact models on a rigid pad
         without JFO cavitation, a cold start takes its first Newton step on the 8x24 grid
         (:func:`_coarse_first_step`; ``warm_start=False`` switches that off too).
+    rebalance : bool
+        From a ``start`` whose load residual exceeds 0.25 (far from balance), first balance the
+        load by bracketing h0 (:func:`cmpsim.loadbalance.balance_load`). ``False`` refuses such a
+        start instead (EquilibriumError): for a trial that a caller would rather shorten than pay
+        a bracket for (the Newton steps of the membrane's bending, :mod:`cmpsim.membrane`).
 
     Raises
     ------
@@ -132,7 +138,7 @@ def solve_equilibrium(
         except ValueError as exc:  # a kernel refused every trial film
             raise EquilibriumError(f"no admissible start position: {exc}") from exc
     try:
-        u, st, it, history = _from_start(problem, start, warm, tol, max_iter, max_step)
+        u, st, it, history = _from_start(problem, start, warm, tol, max_iter, max_step, rebalance)
     except (EquilibriumError, ValueError):
         if not coarse_step:
             raise
@@ -147,9 +153,9 @@ def solve_equilibrium(
     return EquilibriumSolution(st, True, it, problem.factorizations, problem.back_substitutions, history)
 
 
-def _from_start(problem: WaferProblem, start, warm: bool, tol: float, max_iter: int, max_step: float):
-    """Newton from ``start`` (with the load balanced first if far off, and for a Newtonian
-    slurry one restart from an attack-angle scan): (u, state, steps, history)."""
+def _from_start(problem: WaferProblem, start, warm: bool, tol: float, max_iter: int, max_step: float, rebalance: bool = True):
+    """Newton from ``start`` (with the load balanced first if far off, or refused without ``rebalance``, and for
+    a Newtonian slurry one restart from an attack-angle scan): (u, state, steps, history)."""
     u = np.asarray(start, dtype=float).copy()
     if warm and problem._reference is None:
         # a warm start continues a chain of neighbouring points (sweeps, `cmpsim reproduce`):
@@ -164,6 +170,12 @@ def _from_start(problem: WaferProblem, start, warm: bool, tol: float, max_iter: 
         st = problem.state(u)
     except ValueError:
         st = None
+    if not rebalance and (st is None or abs(st.residual[0]) > 0.25):
+        raise EquilibriumError(
+            "the start is far from load balance (load residual "
+            + ("undefined: no admissible film" if st is None else f"{st.residual[0]:.3g}")
+            + ") and rebalancing was not asked for"
+        )
     if st is None or abs(st.residual[0]) > 0.25:
         # far from balance (e.g. the slurry adds a large load to the contact-only start):
         # first balance the load by bracketing h0, then let Newton do the rest

@@ -86,7 +86,12 @@ def film_thickness(x, y, h0, attack_angle, dome_height, wafer_radius, cross_tilt
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     nx, ny = np.sin(attack_angle), np.sin(cross_tilt)
-    nz = np.sqrt(1.0 - nx * nx - ny * ny)
+    tilt = nx * nx + ny * ny
+    if not np.all(tilt < 1.0):  # NaN too: no wafer axis for these angles
+        raise ValueError(
+            f"attack_angle and cross_tilt must satisfy sin^2 + sin^2 < 1 (a wafer axis); got {attack_angle!r} rad and {cross_tilt!r} rad"
+        )
+    nz = np.sqrt(1.0 - tilt)
     if dome_height == 0:
         return h0 - (nx * x + ny * y) / nz
     rc = curvature_radius(dome_height, wafer_radius)

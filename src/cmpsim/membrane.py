@@ -26,7 +26,10 @@ The root is found by Newton's method on F whose linear systems
 
 are solved by GMRES (a Newton-Krylov method, Knoll & Keyes 2004): every Krylov vector costs one
 back-substitution of the state's factorisation and one plate solve, not an equilibrium, and each
-Newton step one equilibrium. A step that does not lower |F| is halved. If Newton fails from the
+Newton step one equilibrium. A step that does not lower |F| is halved; if four halvings do not
+lower it, or the Newton step is over 100 times longer than F (a nearly singular linearisation:
+GMRES then returns metres for a residual of picometres), the fixed-point step F is tried and
+halved in its place (near the root F contracts by the splitting's factor). If Newton fails from the
 start (a thin wafer whose bending is far from linear), the solve is continued in the bending
 stiffness: from a stiffness at which the bending length ell = (D / k)^(1/4) reaches the wafer
 radius (the wafer nearly rigid, the bending small) down to D by factors of 100, each stage
@@ -35,6 +38,7 @@ starting from the last; a stage that fails is split.
 
 from __future__ import annotations
 
+import logging
 import warnings
 from dataclasses import dataclass
 from functools import lru_cache
@@ -47,6 +51,9 @@ from .plate import KirchhoffPlate, PlateOperator
 
 __all__ = ["BendingSolution", "BendingError", "solve_bending"]
 
+#: Each Newton step of the bending at DEBUG level: residual, Krylov iterations, trial residuals.
+log = logging.getLogger(__name__)
+
 #: Stages of the continuation in bending stiffness: the first factor tried, and the smallest
 #: before giving up.
 STAGE_FACTOR = 100.0
@@ -54,9 +61,12 @@ MIN_STAGE_FACTOR = 10.0
 #: Relative residual of the Krylov solve of each Newton step (an inexact Newton step: the outer
 #: iteration then gains about this factor per step on top of its quadratic rate).
 KRYLOV_RTOL = 1e-4
-KRYLOV_MAX_ITER = 200
-#: Halvings of a Newton step that does not lower the residual, before the stage is given up.
+KRYLOV_MAX_ITER = 50
+#: Halvings of a Newton step that does not lower the residual, before the fixed-point step is tried
+#: (and halved as often) and then the stage given up.
 MAX_HALVINGS = 4
+#: A Newton step longer than this many times the fixed-point step |F| is not trusted (see solve_bending).
+MAX_STEP_RATIO = 100.0
 
 
 def plate_operator(plate: KirchhoffPlate, grid: PolarGrid, load_stiffness: float) -> PlateOperator:
@@ -100,6 +110,7 @@ def solve_bending(
     response,
     start=None,
     max_iter: int = 30,
+    trial=None,
 ) -> BendingSolution:
     """Bending w (m) of ``plate`` on ``grid`` with the face pressure of ``equilibrium(w).p_total`` (Pa) and the back pressure ``back_pressure`` (Pa, cells).
 
@@ -108,7 +119,10 @@ def solve_bending(
     of the bending. ``load_stiffness`` k (Pa/m, > 0) preconditions the Newton-Krylov iteration;
     ``tol`` (m) bounds the max-norm of the residual F(w) (the change of the bending a fixed-point
     iteration would still make); ``start`` is a bending to start from (warm start);
-    ``max_iter`` bounds the Newton steps of each stage. Raises :class:`BendingError`.
+    ``max_iter`` bounds the Newton steps of each stage; ``trial(w)``, if given, is the equilibrium
+    at the trial bendings of the Newton steps (the others, at each stage's start, are
+    ``equilibrium(w)``): one that fails where ``equilibrium`` would search further (a position far
+    from balance), so that a step too long is halved rather than paid for. Raises :class:`BendingError`.
     """
     if not (np.isfinite(load_stiffness) and load_stiffness > 0):
         raise BendingError(f"the load stiffness must be finite and > 0 Pa/m to precondition the bending; got {load_stiffness!r}")
@@ -116,12 +130,13 @@ def solve_bending(
     pb = np.asarray(back_pressure, dtype=float).reshape(shape)
     k = load_stiffness
     count = {"solves": 0, "last": None, "krylov": 0}
+    trial_solver = equilibrium if trial is None else trial
 
-    def evaluate(w):
+    def evaluate(w, solver=equilibrium):
         last = count["last"]
         if last is not None and np.array_equal(last[0], w):
             return last[1]
-        st = equilibrium(w)
+        st = solver(w)
         count["solves"] += 1
         count["last"] = (np.array(w, copy=True), st)
         return st
@@ -134,8 +149,8 @@ def solve_bending(
         op = plate_operator(stiff, grid, k)
         k_op = op.k  # the preconditioner's stiffness (k to 1/16 of an octave)
 
-        def residual(wx):
-            return op.deflection(np.asarray(evaluate(wx).p_total).reshape(shape) - pb + k_op * wx) - wx
+        def residual(wx, solver=equilibrium):
+            return op.deflection(np.asarray(evaluate(wx, solver).p_total).reshape(shape) - pb + k_op * wx) - wx
 
         f = residual(w)
         size = np.max(np.abs(f))
@@ -150,22 +165,36 @@ def solve_bending(
                 return (op.deflection(np.asarray(response(w, dw)).reshape(shape) + k_op * dw) - dw).ravel()
 
             try:  # from the fixed-point step dw = F, the Newton step of a purely local pressure response
-                step = gmres(matvec, -f.ravel(), x0=f.ravel(), rtol=KRYLOV_RTOL, max_iter=KRYLOV_MAX_ITER).reshape(shape)
-            except ValueError as exc:
-                raise BendingError(f"the Krylov solve of a Newton step of the bending did not converge in {KRYLOV_MAX_ITER} iterations") from exc
-            for _ in range(MAX_HALVINGS + 1):
-                trial = w + step
-                try:
-                    f_trial = residual(trial)
-                except failures:  # no equilibrium at the trial bending: a step too far, as one that does not lower |F|
-                    f_trial = np.full(shape, np.inf)
-                size_trial = np.max(np.abs(f_trial))
-                if size_trial < size:
-                    break
-                step = 0.5 * step
+                newton = gmres(matvec, -f.ravel(), x0=f.ravel(), rtol=KRYLOV_RTOL, max_iter=KRYLOV_MAX_ITER).reshape(shape)
+            except ValueError:  # no Newton step: the fixed-point step alone
+                newton = None
+            # The preconditioner is the linearised problem of a local pressure response, so the Newton step is of
+            # the size of the fixed-point step F; one orders of magnitude longer comes from a nearly singular
+            # linearisation (a cell at a kink of the pressure's response), not from the problem: take F instead.
+            candidates = [("fixed-point", f)]
+            if newton is not None and np.all(np.isfinite(newton)) and np.max(np.abs(newton)) <= MAX_STEP_RATIO * size:
+                candidates.insert(0, ("Newton", newton))
+            for kind, step in candidates:
+                for _ in range(MAX_HALVINGS + 1):
+                    w_trial = w + step
+                    try:
+                        f_trial = residual(w_trial, trial_solver)
+                    except failures:  # no equilibrium at the trial bending: a step too far, as one that does not lower |F|
+                        f_trial = np.full(shape, np.inf)
+                    size_trial = np.max(np.abs(f_trial))
+                    log.debug(
+                        "bending x%g: |F| %.3g m, %s step %.3g m, Krylov %d, trial |F| %.3g m",
+                        scale, size, kind, np.max(np.abs(step)), count["krylov"], size_trial,
+                    )
+                    if size_trial < size:
+                        break
+                    step = 0.5 * step
+                else:
+                    continue
+                break
             else:
-                raise BendingError(f"no Newton step of the bending lowers its residual ({size:.3g} m)")
-            w, f, size = trial, f_trial, size_trial
+                raise BendingError(f"no Newton or fixed-point step of the bending lowers its residual ({size:.3g} m)")
+            w, f, size = w_trial, f_trial, size_trial
         if size <= tol:
             return w
         raise BendingError(f"the bending did not converge in {max_iter} Newton steps (residual {size:.3g} m against {tol:.3g} m)")

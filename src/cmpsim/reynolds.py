@@ -59,6 +59,8 @@ __all__ = [
     "LinearSolveStats",
     "refine",
     "assembly_map",
+    "venting_map",
+    "venting_film_matrices",
     "factorize",
 ]
 
@@ -126,6 +128,9 @@ class LubricationParameters:
         Haff grain flow (unknown ln(p/p0), the paper) or a Newtonian liquid (unknown: gauge p).
     viscosity : float
         Newtonian viscosity eta, Pa s (> 0); used only by the Newtonian slurry.
+    groove_venting : float
+        kappa^2 of a grooved pad, 1/m^2 (:func:`cmpsim.grooves.groove_venting`; 0 = ungrooved):
+        the sink g kappa^2 phi of the screened Reynolds equation, carried by the face coefficients.
     """
 
     particle_diameter: float
@@ -138,6 +143,7 @@ class LubricationParameters:
     flow_factor_continuation: float = 0.0
     slurry_model: str = "granular"
     viscosity: float = 5e-3
+    groove_venting: float = 0.0
 
     def __post_init__(self) -> None:
         if self.slurry_model not in SLURRY_MODELS:
@@ -148,6 +154,8 @@ class LubricationParameters:
             )
         if not (np.isfinite(self.viscosity) and self.viscosity > 0):
             raise ValueError(f"slurry_viscosity must be finite and > 0 Pa s (valid range: (0, inf)); got {self.viscosity!r}")
+        if not (np.isfinite(self.groove_venting) and self.groove_venting >= 0):
+            raise ValueError(f"groove_venting must be finite and >= 0 1/m^2 (valid range: [0, inf)); got {self.groove_venting!r}")
 
     @property
     def rheology(self):
@@ -160,13 +168,16 @@ class FaceCoefficients:
     """Diffusion tensor (D_xx, D_xy, D_yy; m^3/s) and flux vector (q_x, q_y; m^2/s) on faces.
 
     ``radial`` and ``angular`` hold 5-tuples (dxx, dxy, dyy, qx, qy) of arrays shaped like
-    the grid; ``floored`` counts faces whose flow-factor tensor was regularised.
+    the grid; ``floored`` counts faces whose flow-factor tensor was regularised. ``venting``
+    (kappa^2, 1/m^2; 0 = ungrooved pad) adds the grooves' sink g kappa^2 phi of each cell to the
+    operator (:func:`assemble_operator`), g the cell's conductance (:func:`venting_map`).
     """
 
     radial: tuple
     angular: tuple
     floored: int = 0
     n_faces: int = 0
+    venting: float = 0.0
 
 
 def lubrication_coefficients(h, x, y, params: LubricationParameters, velocities=None):
@@ -297,6 +308,66 @@ def assembly_map(grid: PolarGrid) -> _AssemblyMap:
     return amap
 
 
+@dataclass(frozen=True)
+class _VentingMap:
+    """The cell conductance of the grooves' sink as a linear map of the stacked face components."""
+
+    to_cells: sp.csr_matrix  # (N, 4 N): area_P g_P, m^2 x (m^3/s or m^4/(Pa s))
+    diagonal: np.ndarray  # position of each diagonal entry A[P, P] in the CSR data of the operator
+
+
+_VENT_MAPS: dict = {}
+
+
+def venting_map(grid: PolarGrid) -> _VentingMap:
+    """The map c -> area_P g_P of a grid (built once per grid, cached), with the operator's diagonal positions.
+
+    g_P, the cell's isotropic conductance, is the mean of the radial conductance D_rr on its
+    radial faces (the outer one, and the inner one off the centre) and of the angular one D_tt
+    on its two angular faces, averaged: (D_rr + D_tt) / 2 = trace(D) / 2 at second order.
+    """
+    vm = _VENT_MAPS.get(grid)
+    if vm is not None:
+        return vm
+    N = grid.size
+    i, j = (a.ravel() for a in np.indices((grid.n_r, grid.n_theta)))
+    P = np.arange(N)  # = grid.index(i, j)
+    area = grid.area.ravel()
+    n_radial = np.where(i > 0, 2.0, 1.0)  # the centre's cells have no inner face
+    rows = [P, P[i > 0], P, P]
+    src = [P, grid.index(i[i > 0] - 1, j[i > 0]), 2 * N + P, 2 * N + grid.index(i, j - 1)]
+    wts = [0.5 * area / n_radial, 0.5 * area[i > 0] / 2.0, 0.25 * area, 0.25 * area]
+    to_cells = sp.csr_matrix((np.concatenate(wts), (np.concatenate(rows), np.concatenate(src))), shape=(N, 4 * N))
+    amap = assembly_map(grid)
+    rows_a = np.repeat(np.arange(N), np.diff(amap.indptr))
+    diagonal = np.flatnonzero(rows_a == amap.indices)
+    if diagonal.size != N:
+        raise RuntimeError("the Reynolds operator's pattern lacks diagonal entries")  # pragma: no cover (geometry)
+    vm = _VentingMap(to_cells, diagonal)
+    if len(_VENT_MAPS) > 16:
+        _VENT_MAPS.clear()
+    _VENT_MAPS[grid] = vm
+    return vm
+
+
+def venting_film_matrices(grid: PolarGrid, dcoeffs: FaceCoefficients, phi, venting: float):
+    """(V_r, V_a): change of each cell's venting sink per unit change of the film on the radial / angular faces.
+
+    The sink of cell P is kappa^2 area_P g_P phi_P (m^3/s; :func:`venting_map`), with g_P linear in
+    its faces' conductances; ``dcoeffs`` holds their derivatives in the film on each face (per m),
+    so V_r[P, f] = kappa^2 phi_P d(area_P g_P)/dh_f (m^3/s per m, sparse N x N each). The part of the
+    pad-coupled Newton matrix the face-flux slopes (:func:`own_face_fluxes`) do not hold.
+    """
+    N = grid.size
+    vm = venting_map(grid)
+    dc = _stacked_components(assembly_map(grid), dcoeffs)
+    scale = sp.diags(venting * np.asarray(phi, dtype=float).ravel())
+    return (
+        (scale @ vm.to_cells[:, :N] @ sp.diags(dc[:N])).tocsr(),
+        (scale @ vm.to_cells[:, 2 * N : 3 * N] @ sp.diags(dc[2 * N : 3 * N])).tocsr(),
+    )
+
+
 def _stacked_components(amap: _AssemblyMap, coeffs: FaceCoefficients) -> np.ndarray:
     c, s = amap.cos_r, amap.sin_r
     dxx, dxy, dyy = coeffs.radial[:3]
@@ -316,10 +387,16 @@ def assemble_operator(grid: PolarGrid, coeffs: FaceCoefficients) -> sp.csr_matri
     For a symmetric positive-definite D it is an M-matrix (without cross terms), singular
     only without the Dirichlet edge. Units: m^3/s (flux per unit phi). The entries are a
     linear map of the face tensors, precomputed once per grid (:func:`assembly_map`): one
-    sparse mat-vec per assembly.
+    sparse mat-vec per assembly. A grooved pad (``coeffs.venting`` = kappa^2 > 0) adds the
+    sink kappa^2 area_P g_P to the diagonal (:func:`venting_map`; ``docs/model.md``, "Grooved
+    pad"), still linear in the face tensors.
     """
     amap = assembly_map(grid)
-    data = amap.to_data @ _stacked_components(amap, coeffs)
+    c = _stacked_components(amap, coeffs)
+    data = amap.to_data @ c
+    if coeffs.venting:
+        vm = venting_map(grid)
+        data[vm.diagonal] += coeffs.venting * (vm.to_cells @ c)
     N = grid.size
     return sp.csr_matrix((data, amap.indices, amap.indptr), shape=(N, N), copy=False)
 

@@ -17,6 +17,7 @@ from .contact import PadSurface
 from .flowfactors import RoughnessGeometry
 from .geometry import check_geometry
 from .grainflow import granular_pressure
+from .grooves import groove_venting
 from .grid import PolarGrid
 from .kinematics import Kinematics
 from .padstack import LayeredFoundation, WinklerFoundation
@@ -92,6 +93,7 @@ def physical_setup(config: Config) -> PhysicalSetup:
         flow_factor_continuation=c.flow_factor_continuation,
         slurry_model=c.slurry_model,
         viscosity=c.newtonian_viscosity,
+        groove_venting=groove_venting(c.pad_groove_pitch, c.pad_groove_width),
     )
     p0 = float(granular_pressure(c.grain_bulk_density, c.diameter_gap_ratio, v, t=HAFF_T))
     grid = c.polar_grid()

@@ -13,8 +13,14 @@ thickness t_in(r) - RR(r) T (:func:`read_incoming` reads the profile from a CSV 
 Gauss-Newton step on the zone response J_ik = d RR_i / d P_k, measured by finite differences of
 warm-started solves (the equilibrium and the wafer's bending of the current pressures as the
 start), solved as a bounded linear least-squares problem (:func:`scipy.optimize.lsq_linear`,
-Branch & al.'s trust-region reflective method); the step is kept if the solved profile is
-flatter, halved otherwise.
+Branch & al.'s trust-region reflective method) inside a trust region, a box of half-width Delta
+around the pressures: the step is kept if the solved profile is flatter; otherwise Delta is
+halved and the step solved again. Delta starts at :data:`TRUST_START` of the largest start
+pressure and follows the ratio of the achieved to the linearly predicted gain (Nocedal & Wright,
+*Numerical Optimization*, 2006, algorithm 4.1): halved below 1/4, doubled above 3/4 for a step
+that reached the box. The zone responses of a membrane head overlap (a zone's pressure moves the
+rate far outside it), so the least-squares problem is ill-conditioned and an unbounded
+Gauss-Newton step can ask for pressures the linearisation does not describe.
 """
 
 from __future__ import annotations
@@ -39,6 +45,10 @@ __all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "KEEP"
 PSI = 6894.757293168361
 #: Default bounds of the zone pressures, Pa (0.5-8 psi, issue 25).
 DEFAULT_BOUNDS = (0.5 * PSI, 8.0 * PSI)
+#: The first step's trust region, a fraction of the largest start pressure: no zone moves further.
+TRUST_START = 0.25
+#: Shrinks of the trust region in a step whose trial does not flatten the profile, before the tuning stops.
+MAX_SHRINKS = 4
 #: What a tuning may keep fixed besides flattening.
 KEEP = (None, "pressure", "rate")
 #: Units a column of an incoming-thickness CSV may name in its header (``radius_mm``), in m.
@@ -298,13 +308,17 @@ def tune_zones(
 
     target = float(np.sum(weights * quantity(base)) / weights.sum())  # the start's mean of q
 
+    def nonuniformity_of(values) -> float:
+        return weighted_std_over_mean(values, weights)
+
     def nonuniformity(result) -> float:
-        return weighted_std_over_mean(quantity(result), weights)
+        return nonuniformity_of(quantity(result))
 
     current, pressures = base, start.copy()
     wiwnu = nonuniformity(base)
     history = [(tuple(pressures), wiwnu)]
     response = np.zeros((weights.size, start.size))
+    delta = TRUST_START * float(np.max(start))  # the trust region: no zone moves by more than this in a step, Pa
     for _ in range(max_steps):
         rate = profile_of(current)["rate"]
         q = quantity(current)
@@ -321,23 +335,35 @@ def tune_zones(
             rhs.append([0.0])
         elif keep == "rate":  # the level m is the start's mean of q (of the rate, or t_in - rate T)
             lower[-1], upper[-1] = target - 1e-12 * abs(target), target + 1e-12 * abs(target)
-        sol = lsq_linear(np.vstack(rows), np.concatenate(rhs), bounds=(lower, upper))
-        step = sol.x[:-1]
+        A_all, b_all = np.vstack(rows), np.concatenate(rhs)
         accepted = False
-        for _halving in range(4):
+        for _shrink in range(MAX_SHRINKS + 1):
+            box_lo = np.concatenate([np.maximum(lower[:-1], -delta), lower[-1:]])
+            box_hi = np.concatenate([np.minimum(upper[:-1], delta), upper[-1:]])
+            step = lsq_linear(A_all, b_all, bounds=(box_lo, box_hi)).x[:-1]
             trial = np.clip(pressures + step, lo, hi)
+            if np.max(np.abs(trial - pressures)) <= 1e-9 * float(np.max(pressures)):
+                break  # the linear model asks for no change: a (bounded) least-squares minimum
+            predicted = nonuniformity_of(q + scale * response @ (trial - pressures))
             try:
                 result = run(trial)
             except EquilibriumError:  # a step too far for the solver counts as one that does not flatten
-                step = 0.5 * step
+                delta = 0.5 * np.max(np.abs(trial - pressures))
                 continue
             value = nonuniformity(result)
             if value < wiwnu:
                 accepted = True
                 break
-            step = 0.5 * step
+            delta = 0.5 * np.max(np.abs(trial - pressures))
         if not accepted:
             break
+        # the trust radius follows how well the linear model predicted the gain (Nocedal & Wright 2006, alg. 4.1)
+        agreement = (wiwnu - value) / max(wiwnu - predicted, 1e-300)
+        moved = np.max(np.abs(trial - pressures))
+        if agreement < 0.25:
+            delta = 0.5 * moved
+        elif agreement > 0.75 and moved > 0.99 * delta:
+            delta = 2.0 * delta
         gain = (wiwnu - value) / wiwnu
         current, pressures, wiwnu = result, trial, value
         run.adopt(result)

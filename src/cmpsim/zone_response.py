@@ -15,12 +15,20 @@ wafer's bending at the given pressures. From it:
 - the local gain of each zone (:func:`local_gains`), the elasticity (P_k / RR_k) dRR_k/dP_k of
   the zone's own area-mean rate RR_k: a gain of 1 means +10 % of pressure gives +10 % of rate
   under the zone, as Preston's law would locally;
+- the contrast gain of each zone (:func:`contrast_gains`), the elasticity of the ratio of the
+  zone's mean rate to the mean rate of the rest of the wafer: what the zone does to the *shape*
+  of the profile. A response common to the whole wafer (a zone's load that only shifts the
+  wafer's level) cancels from it; a zone that moves only its own rate, like Preston's law, has
+  contrast gain = local gain;
 - the response width at each zone boundary (:func:`boundary_widths`): raise every zone inside
   the boundary R_b by the same pressure (a pressure step at R_b) and measure over which radial
   distance the rate change falls from 90 % to 10 % of its fall between the middles of the two
   zones on either side. An ideal head (a membrane on a local pad under a rigid-free wafer)
   gives a step, width 0 up to the grid's ring width; a bending wafer and a laterally coupled
-  pad smear it over the bending length (D/k)^(1/4) (docs/model.md, section 13f).
+  pad smear it over the bending length ell = (D/k)^(1/4) (docs/model.md, section 13f), D the
+  wafer's bending stiffness and k the load stiffness -d(mean pressure)/d(h0) of the equilibrium
+  (:func:`load_stiffness`): Hetenyi's step on a Winkler bed falls from 90 % to 10 % over 2.82 ell
+  (:func:`cmpsim.testing.plates.hetenyi_step_width`).
 
 The tuner (:mod:`cmpsim.tuning`) uses the same solver and the same finite differences.
 """
@@ -45,6 +53,8 @@ __all__ = [
     "profile_of",
     "inside_share",
     "local_gains",
+    "contrast_gains",
+    "load_stiffness",
     "boundary_widths",
 ]
 
@@ -135,6 +145,46 @@ def local_gains(response, rate, ring_faces, radius, zone_radii, pressures) -> tu
     return tuple(out)
 
 
+def contrast_gains(response, rate, ring_faces, radius, zone_radii, pressures) -> tuple:
+    """Elasticity of each zone's mean rate relative to the rest of the wafer, P_k d ln(RR_k / RR_out,k) / d P_k (dimensionless).
+
+    RR_k is the ring-area-weighted mean of the profile over the rings whose centre lies in zone k
+    (as in :func:`local_gains`), RR_out,k the same mean over every other ring. A change common to
+    the whole wafer (every ring's rate moved by the same fraction) cancels; a zone that moves
+    only its own rate has contrast gain equal to its local gain. NaN for a zone that covers the
+    whole wafer (nothing outside it).
+    """
+    ring_area = np.diff(np.asarray(ring_faces, dtype=float) ** 2)
+    rate, J = np.asarray(rate, dtype=float), np.asarray(response, dtype=float)
+    out = []
+    for k, m in enumerate(_zone_masks(radius, zone_radii)):
+        elasticity = []
+        for part in (m, ~m):
+            a = ring_area[part]
+            if not a.sum() > 0:
+                elasticity.append(float("nan"))
+                continue
+            elasticity.append(float(np.sum(a * J[part, k]) / np.sum(a * rate[part])))
+        out.append(float(pressures[k] * (elasticity[0] - elasticity[1])))
+    return tuple(out)
+
+
+def load_stiffness(result) -> float:
+    """The load stiffness k = -d(mean pressure)/d(h0) (Pa/m) of a solved equilibrium on a compliant pad.
+
+    The change of the wafer's mean face pressure when the whole wafer moves towards the pad, from
+    the equilibrium's own linearisation (the pad model's ``sensitivity``: pad, asperity contact and
+    slurry together); the foundation stiffness of the plate-on-foundation picture. Measured as the
+    membrane carrier measures the stiffness that preconditions its bending
+    (:meth:`cmpsim.models.carriers.MembraneCarrier.equilibrium`), but at ``result``'s bent
+    equilibrium, not at the rigid-body start (300mm preset: 1.29e9 against 1.17e9 Pa/m).
+    """
+    problem, state = result.problem, result.solution.state
+    _, dp_du = problem.pad_model.sensitivity(problem, state)
+    grid = problem.grid
+    return float(-grid.integrate(dp_du[..., 0]) / grid.integrate(np.ones_like(state.h)))
+
+
 @dataclass(frozen=True)
 class BoundaryWidth:
     """The response at one zone boundary (m; see :func:`boundary_widths`).
@@ -211,7 +261,9 @@ class ZoneResponse:
 
     ``response`` J_ik = d RR_i / d P_k (rings x zones, m/s/Pa) at ``zone_pressures``; ``profile``
     the removal profile there (radius, rate); ``ring_faces`` the grid's ring faces; ``solves``
-    the equilibria solved (one per zone plus the base).
+    the equilibria solved (one per zone plus the base); ``load_stiffness`` k (Pa/m,
+    :func:`load_stiffness`) and ``bending_stiffness`` D (N m) of the wafer at the base
+    equilibrium, None where not measured.
     """
 
     zone_radii: tuple
@@ -221,6 +273,8 @@ class ZoneResponse:
     response: np.ndarray
     step: float
     solves: int
+    load_stiffness: float | None = None
+    bending_stiffness: float | None = None
 
     @property
     def inside(self) -> tuple:
@@ -231,6 +285,18 @@ class ZoneResponse:
     def gains(self) -> tuple:
         """:func:`local_gains` of each zone (dimensionless)."""
         return local_gains(self.response, self.profile["rate"], self.ring_faces, self.profile["radius"], self.zone_radii, self.zone_pressures)
+
+    @property
+    def contrast(self) -> tuple:
+        """:func:`contrast_gains` of each zone (dimensionless)."""
+        return contrast_gains(self.response, self.profile["rate"], self.ring_faces, self.profile["radius"], self.zone_radii, self.zone_pressures)
+
+    @property
+    def bending_length(self) -> float | None:
+        """The wafer's bending length ell = (D / k)^(1/4) on the equilibrium's load stiffness, m (None if not measured)."""
+        if self.load_stiffness is None or self.bending_stiffness is None or not self.load_stiffness > 0:
+            return None
+        return float((self.bending_stiffness / self.load_stiffness) ** 0.25)
 
     @property
     def boundaries(self) -> list:
@@ -247,8 +313,12 @@ class ZoneResponse:
             "zone_response_inside": list(self.inside),
             "zone_response_gain": list(self.gains),
             "zone_response_width": [b.to_dict() for b in self.boundaries],
+            "zone_response_contrast": [None if np.isnan(c) else c for c in self.contrast],  # None: nothing outside the zone
+            "load_stiffness": self.load_stiffness,
+            "bending_length": self.bending_length,
             "units": {"zone_radii": "m", "zone_pressures": "Pa", "radius": "m", "rate": "m/s", "response": "m/s/Pa",
-                      "zone_response_inside": "1", "zone_response_gain": "1", "zone_response_width": "m"},
+                      "zone_response_inside": "1", "zone_response_gain": "1", "zone_response_width": "m",
+                      "zone_response_contrast": "1", "load_stiffness": "Pa/m", "bending_length": "m"},
             "solves": self.solves,
         }
 
@@ -267,7 +337,8 @@ def zone_response(config: Config, step: float = RESPONSE_STEP) -> ZoneResponse:
     Returns
     -------
     ZoneResponse
-        One solve at the pressures and one per zone, warm-started from it.
+        One solve at the pressures and one per zone, warm-started from it; the load stiffness of
+        the first (its linearisation, after the zones' solves).
 
     Raises
     ------
@@ -294,4 +365,6 @@ def zone_response(config: Config, step: float = RESPONSE_STEP) -> ZoneResponse:
         response=J,
         step=step,
         solves=run.solves,
+        load_stiffness=load_stiffness(base),
+        bending_stiffness=float(base.problem.carrier.plate.bending_stiffness),
     )

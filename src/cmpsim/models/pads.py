@@ -75,7 +75,7 @@ class RigidPad:
         """Reynolds coefficients on all faces at position u (one evaluation on both face sets)."""
         c = lubrication_coefficients(self.film(problem, u, problem._xf, problem._yf), problem._xf, problem._yf, problem.lub, problem._vf)
         floored = int(np.count_nonzero(c[5]))
-        return FaceCoefficients(tuple(a[0] for a in c[:5]), tuple(a[1] for a in c[:5]), floored, c[5].size)
+        return FaceCoefficients(tuple(a[0] for a in c[:5]), tuple(a[1] for a in c[:5]), floored, c[5].size, problem.lub.groove_venting)
 
     # ------------------------------------------------------------------ state
     def state(self, problem, u, guess=None) -> PressureState:
@@ -148,7 +148,8 @@ class RigidPad:
             steps.append(du)
             dh = self.film(problem, st.u + du, problem._xf, problem._yf) - hf
             dc = [d * dh for d in dcdh]
-            dcoeffs = FaceCoefficients(tuple(a[0] for a in dc), tuple(a[1] for a in dc))
+            # the sink of a grooved pad is linear in the coefficients too: its change is in A(dc_k) phi
+            dcoeffs = FaceCoefficients(tuple(a[0] for a in dc), tuple(a[1] for a in dc), venting=problem.lub.groove_venting)
             dr[:, k] = assemble_operator(problem.grid, dcoeffs) @ phi + flux_divergence(problem.grid, dcoeffs)
         system = st.system
         if system.own_factor is None and system.refinement_steps > JACOBIAN_REFINE_LIMIT:
@@ -295,7 +296,7 @@ class WinklerPad(RigidPad):
         rad = lubrication_coefficients(self.film(problem, u, problem.xr, problem.yr), problem.xr, problem.yr, problem.lub)
         ang = lubrication_coefficients(self.film(problem, u, problem.xa, problem.ya), problem.xa, problem.ya, problem.lub)
         floored = int(np.count_nonzero(rad[5]) + np.count_nonzero(ang[5]))
-        return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size)
+        return FaceCoefficients(rad[:5], ang[:5], floored, rad[5].size + ang[5].size, problem.lub.groove_venting)
 
     def state(self, problem, u, guess=None) -> PressureState:
         return compliance.coupled_state(problem, u)
