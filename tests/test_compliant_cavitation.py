@@ -150,8 +150,10 @@ def test_layered_default_suction_comes_from_the_edge_band_and_vanishes_with_the_
     winkler = cmpsim.solve(relative=False, grid=SUCTION_GRID)
     # a coupling length far below a cell: the Winkler answer, the slurry pushing (+15 %)
     assert short.fluid_load_fraction == pytest.approx(winkler.fluid_load_fraction, abs=0.02) and short.fluid_load_fraction > 0.1
-    # the default stack (coupling length 2.5 mm): the slurry pulls, about the whole load
-    assert -1.05 < default.fluid_load_fraction < -0.85
+    # the default stack (coupling length 2.5 mm): the slurry pulls, most of the load (-83 % with eq. 8
+    # continued below 0.4; -96 % with the floor alone, whose equilibrium folds on other grids: docs/model.md,
+    # section 5), inside the 50-100 % of the load Shan et al. measured
+    assert -1.0 < default.fluid_load_fraction < -0.5
     st = default.solution.state
     # nothing cavitates: the suction is not a cavitation artefact (JFO = Gumbel, test above)
     assert st.p_slurry.min() > default.config.cavitation_pressure

@@ -15,6 +15,7 @@ from hypothesis import strategies as st
 
 from cmpsim.flowfactors import (
     RoughnessGeometry,
+    continue_pressure_eigenvalues,
     orientation_coefficients,
     perturbation_validity_limit,
     pressure_flow_factors,
@@ -250,6 +251,61 @@ def test_regularize_handles_a_negative_isotropic_tensor_and_an_all_valid_field()
 def test_regularize_rejects_a_floor_that_is_not_finite_and_positive(floor):
     with pytest.raises(ValueError, match="floor"):
         regularize_pressure_tensor(1.0, 0.0, 1.0, floor)
+
+
+# --- continuation of eq. 8 below its validity (flow_factor_continuation) ------------------
+@pytest.mark.parametrize("start", [0.25, 0.4, 0.5, 0.8])
+def test_the_continued_eigenvalue_is_the_power_law_in_the_film_that_joins_eq_8_with_its_slope(start):
+    # isotropic roughness at x -> 0: eq. 8 is 1 - 1.5 (sigma/h)^2; below lam_c (at H_c) the continuation
+    # is lam_c (H / H_c)^n with n = 2 (1 - lam_c) / lam_c, written independently of the kernel
+    beta = -1.5
+    H = np.linspace(0.05, 4.0, 4001)
+    lam = 1.0 + beta / H**2
+    Hc = math.sqrt(-beta / (1.0 - start))
+    n = 2.0 * (1.0 - start) / start
+    want = np.where(H < Hc, start * (H / Hc) ** n, lam)
+    got = continue_pressure_eigenvalues(lam, start)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
+    # positive everywhere, increasing with the film, and C1 across H_c (one-sided slopes in H agree)
+    assert np.all(got > 0.0) and np.all(np.diff(got) > 0.0)
+    eps = 1e-6 * Hc
+    f = lambda x: float(continue_pressure_eigenvalues(1.0 + beta / x**2, start))  # noqa: E731
+    left, right = (f(Hc) - f(Hc - eps)) / eps, (f(Hc + eps) - f(Hc)) / eps
+    assert left == pytest.approx(right, rel=1e-4) and left == pytest.approx(-2.0 * beta / Hc**3, rel=1e-4)
+
+
+def test_the_continuation_leaves_eigenvalues_at_or_above_its_start_bit_for_bit_and_zero_switches_it_off():
+    lam = np.array([-50.0, -1.0, 0.0, 0.1, 0.3999, 0.4, 0.7, 1.0, 3.0])
+    got = continue_pressure_eigenvalues(lam, 0.4)
+    assert np.array_equal(got[5:], lam[5:]) and np.all(got[:5] > 0.0) and np.all(got[:5] < 0.4)
+    assert np.array_equal(continue_pressure_eigenvalues(lam, 0.0), lam)
+    # -> 0 only as the film closes: eq. 8's eigenvalue -> -inf
+    assert continue_pressure_eigenvalues(np.array([-1e12]), 0.4)[0] < 1e-15
+    for bad in (1.0, 1.5, np.nan, np.inf):
+        with pytest.raises(ValueError, match="flow_factor_continuation"):
+            continue_pressure_eigenvalues(lam, bad)
+
+
+@settings(max_examples=200, deadline=None)
+@given(a=components, b=components, c=components, floor=floors, start=st.floats(min_value=0.05, max_value=0.95))
+def test_the_continued_tensor_keeps_its_eigenvectors_with_eigenvalues_max_of_continued_and_floor(a, b, c, floor, start):
+    na, nb, nc, changed = regularize_pressure_tensor(a, b, c, floor, start)
+    lam = _eig(a, b, c)
+    new = _eig(float(na), float(nb), float(nc))
+    scale = max(abs(a), abs(b), abs(c), floor, 1.0)
+    want = np.sort(np.maximum(continue_pressure_eigenvalues(lam, start), floor))
+    np.testing.assert_allclose(new, want, rtol=0, atol=16 * np.finfo(float).eps * scale)
+    if abs(lam[0] - max(floor, start)) > 8 * np.finfo(float).eps * scale:
+        assert bool(changed) == (lam[0] < max(floor, start))
+    if not changed:
+        assert (na, nb, nc) == (a, b, c)
+
+
+def test_without_continuation_the_regularisation_is_the_floor_alone_bit_for_bit():
+    rng = np.random.default_rng(11)
+    a, b, c = rng.uniform(-2, 3, (3, 40, 30))
+    for x, y in zip(regularize_pressure_tensor(a, b, c, 0.05), regularize_pressure_tensor(a, b, c, 0.05, 0.0)):
+        assert np.array_equal(x, y)
 
 
 # --- argument checking -------------------------------------------------------------------

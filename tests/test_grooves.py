@@ -153,8 +153,14 @@ def test_grooved_pad_equilibrium_balances_load_and_moment_to_1e_9(overrides):
 
 
 @pytest.mark.parametrize("compliance", ["winkler", "layer"])
-def test_grooved_coupled_jacobian_matches_central_differences(compliance):
+def test_grooved_coupled_jacobian_matches_central_differences(compliance, monkeypatch):
     """The pad-coupled Newton sees the venting's film derivative (a cell term, not a face flux)."""
+    import cmpsim.compliance
+
+    # the layered pad's Newton systems are GMRES solves to LAYER_KRYLOV_RTOL (1e-4), which leaves its
+    # Jacobian good to a few 1e-4 only (1.6e-4 here, with eq. 8 continued on 11 % of the faces):
+    # solved tightly the linearisation itself is checked (measured: 9e-9, with and without the continuation)
+    monkeypatch.setattr(cmpsim.compliance, "LAYER_KRYLOV_RTOL", 1e-10)
     cfg = Config.default().replace(pad_compliance=compliance, **K_GROOVE)
     solved = cmpsim.solve(cfg)
     problem = build_problem(cfg)

@@ -99,10 +99,7 @@ fig.suptitle(f"Default operating point, four zones (grey: zone boundaries), grid
 fig.tight_layout()
 fig.savefig(OUT / "head.png", dpi=80)
 
-# The layered pad's default model does not converge on the coarse preset (docs/limitations.md,
-# strict xfail test_the_coarse_layered_default_converges_near_the_equal_ring_grid): its quick runs use the default grid.
-LAYER_GRID = "default" if GRID == "coarse" else GRID
-layer = base.replace(pad_compliance="layer", grid=LAYER_GRID)
+layer = base.replace(pad_compliance="layer")
 pressures = (0.0, 2.0, 4.0, 6.0)
 edge = []
 for psi in pressures:

@@ -212,11 +212,8 @@ plt.close(fig)
 
 # ---- the default model (section 13d) on its Winkler stack, and on the layered one
 print("\ndefault model (Newtonian slurry, IC1000 summits, shear-power removal):")
-# The layered pad's default model does not converge on the coarse preset (docs/limitations.md,
-# strict xfail test_the_coarse_layered_default_converges_near_the_equal_ring_grid): its quick runs use the default grid.
-LAYER_GRID = "default" if GRID == "coarse" else GRID
 for name in ("winkler", "layer"):
-    r = cmpsim.solve(cmpsim.Config.default().replace(grid=LAYER_GRID if name == "layer" else GRID, pad_compliance=name), relative=False)
+    r = cmpsim.solve(cmpsim.Config.default().replace(grid=GRID, pad_compliance=name), relative=False)
     print(
         f"{name:>8}: mean {nm_per_min(r):.1f} nm/min, WIWNU {100 * nonuniformity(r):.2f} %, "
         f"slurry share of the load {r.fluid_load_fraction:+.3f}"

@@ -133,6 +133,7 @@ PARAMETERS: dict[str, Param] = {
         _P("grid", "numerics", "-", "grid", "", "default", "Polar grid: preset or rings x sectors", "docs/model.md ('Grid')"),
         _P("grid_grading", "numerics", "-", "choice", "", "edge", "Rings of the named grids: graded towards the wafer edge (a preset fixes the rim ring width: 0.9 / 0.3 / 0.15 mm), or equally wide ('uniform'; always for rings x sectors)", "docs/model.md ('Grid'); 'uniform' is the paper preset's (cmpsim 0.1) grid", choices=("edge", "uniform")),
         _P("flow_factor_floor", "numerics", "Phi_min", "", "", 0.05, "Smallest eigenvalue of the pressure flow-factor tensor passed to the solver", "docs/model.md ('Flow-factor validity')", 0.0, 1.0, True, False),
+        _P("flow_factor_continuation", "numerics", "Phi_c", "", "", 0.4, "Eigenvalue of the pressure flow-factor tensor below which eq. 8-10 are continued by a C1 power law in the film, vanishing only at h = 0 (0: none, the floor alone, as the paper preset)", "docs/model.md ('Flow-factor validity'): the largest value that leaves the default model's and the presets' base cases on eq. 8 (smallest eigenvalue 0.45-0.48), above the 0.2-0.3 below which the layered pad's equilibrium folds", 0.0, 1.0, False, True),
         _P("tolerance", "numerics", "-", "", "", 1e-9, "Newton tolerance on the relative load and moment residuals", "-", 0.0, 1e-3, True, False),
         _P("max_iterations", "numerics", "-", "", "", 40, "Newton steps allowed", "-", 1.0, 1000.0, False, False),
     ]
@@ -155,6 +156,8 @@ PRESETS: dict[str, dict[str, Any]] = {
         "cavitation": "none",
         "pad_compliance": "rigid",
         "grid_grading": "uniform",
+        # the paper's flow factors with cmpsim 0.1's floor alone (its hydrodynamic variant lives below eq. 8's validity)
+        "flow_factor_continuation": 0.0,
         # SI floats, exactly the defaults of cmpsim 0.1.0 ("15 um" would parse to 1.4999999999999999e-05 m)
         "pad_modulus": 100e6,
         "pad_hardness": 9.4e6,

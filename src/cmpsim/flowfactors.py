@@ -6,9 +6,10 @@ wafer; roughness angles are measured from the sliding direction x, in radians.
 The pressure flow-factor tensor of eq. 8–10 is a perturbation result, valid for
 (sigma/h)^2 small. For isotropic pad roughness it reads 1 + (sigma/h)^2 (g - f^2/2), which
 turns non-positive for h/sigma below about 1.22. :func:`regularize_pressure_tensor` is the
-one gate through which the tensor reaches a solver: it projects the tensor onto symmetric
-matrices with every eigenvalue >= a floor and reports where it did so (``docs/model.md``,
-section "Flow-factor validity").
+one gate through which the tensor reaches a solver: it continues each eigenvalue below a
+matching value by a C1 power law in h (:func:`continue_pressure_eigenvalues`), projects the
+tensor onto symmetric matrices with every eigenvalue >= a floor and reports where it did
+either (``docs/model.md``, section "Flow-factor validity").
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ __all__ = [
     "shear_flow_factors",
     "shear_stress_factors",
     "regularize_pressure_tensor",
+    "continue_pressure_eigenvalues",
     "perturbation_validity_limit",
 ]
 
@@ -202,19 +204,53 @@ def perturbation_validity_limit(f, g, rough: RoughnessGeometry, floor: float = 0
     return out
 
 
-def regularize_pressure_tensor(phi_xx, phi_xy, phi_yy, floor: float):
+def continue_pressure_eigenvalues(lam, start: float):
+    """Eigenvalues of the pressure flow-factor tensor continued below ``start``, dimensionless.
+
+    Eq. 8-10 give each eigenvalue as lam = 1 + beta (sigma/h)^2 (beta < 0 where it falls with the
+    film). Below lam_c = ``start`` (reached at h_c) it is continued by the power law
+    lam_c (h / h_c)^n that joins it with equal value and slope, n = 2 (1 - lam_c) / lam_c;
+    eliminating h, in terms of the eigenvalue of eq. 8 itself,
+
+        lam -> lam                                             for lam >= lam_c,
+        lam -> lam_c ((1 - lam_c) / (1 - lam))^((1 - lam_c) / lam_c)   for lam < lam_c,
+
+    continuous with its first derivative (1 at lam_c), increasing, positive, and tending to 0
+    only as h -> 0 (lam -> -inf): the film's pressure flow vanishes at the mean plane, the
+    percolation threshold of isotropic roughness, where eq. 8 vanishes at h = sqrt(-beta) sigma
+    (1.22 sigma for isotropic roughness at x -> 0) and turns negative. ``start`` <= 0 returns lam
+    unchanged. ``docs/model.md``, section 5 ("Flow-factor validity"), gives the reasons.
+    """
+    lam = np.asarray(lam, dtype=float)
+    start = float(start)
+    if not (np.isfinite(start) and start < 1.0):
+        raise ValueError(f"flow_factor_continuation must be finite and in [0, 1) (valid range: [0, 1)); got {start!r}")
+    if start <= 0.0:
+        return lam.copy()
+    n_half = (1.0 - start) / start
+    below = lam < start
+    with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
+        low = start * ((1.0 - start) / (1.0 - np.where(below, lam, 0.0))) ** n_half
+    return np.where(below, low, lam)
+
+
+def regularize_pressure_tensor(phi_xx, phi_xy, phi_yy, floor: float, continuation: float = 0.0):
     """Project a 2x2 symmetric tensor field onto eigenvalues >= ``floor`` (> 0).
 
-    The tensor keeps its eigenvectors; each eigenvalue below ``floor`` is raised to it.
-    This is the documented behaviour outside the validity of the perturbation expansion:
-    no non-positive diffusion coefficient reaches the Reynolds solver.
+    The tensor keeps its eigenvectors; each eigenvalue below ``continuation`` is continued by
+    :func:`continue_pressure_eigenvalues` (C1 in the film), then each eigenvalue below ``floor``
+    is raised to it. With ``continuation = 0`` only the floor acts (as before
+    ``flow_factor_continuation`` existed, and in the paper preset: a kink where an eigenvalue
+    meets the floor). This is the documented behaviour outside the validity of the perturbation
+    expansion of eq. 8-10 (``docs/model.md``, section 5): no non-positive diffusion coefficient
+    reaches the Reynolds solver.
 
     Returns
     -------
     phi_xx, phi_xy, phi_yy : numpy.ndarray
         The regularised components.
     floored : numpy.ndarray of bool
-        True where an eigenvalue was raised.
+        True where an eigenvalue was changed (continued or raised to the floor).
     """
     if not (np.isfinite(floor) and floor > 0):
         raise ValueError(f"floor must be finite and > 0 (valid range: (0, inf)); got {floor!r}")
@@ -224,9 +260,11 @@ def regularize_pressure_tensor(phi_xx, phi_xy, phi_yy, floor: float):
     mean = 0.5 * (a + c)
     rad = np.hypot(0.5 * (a - c), b)
     lam1, lam2 = mean + rad, mean - rad  # lam1 >= lam2
-    floored = lam2 < floor
+    floored = lam2 < max(floor, continuation)
     if not np.any(floored):
         return a.copy(), b.copy(), c.copy(), floored
+    if continuation > 0.0:
+        lam1, lam2 = continue_pressure_eigenvalues(lam1, continuation), continue_pressure_eigenvalues(lam2, continuation)
     l1 = np.maximum(lam1, floor)
     l2 = np.maximum(lam2, floor)
     # eigenvector of lam1: angle alpha with tan(2 alpha) = 2b / (a - c)

@@ -120,6 +120,10 @@ class LubricationParameters:
     kinematics : Kinematics
     flow_factor_floor : float
         Smallest eigenvalue of Phi^p allowed to reach the solver, dimensionless (> 0).
+    flow_factor_continuation : float
+        Eigenvalue of Phi^p below which eq. 8-10 are continued by a C1 power law in the film,
+        dimensionless, in [0, 1) (0: none, the floor alone;
+        :func:`cmpsim.flowfactors.continue_pressure_eigenvalues`).
     slurry_model : {"granular", "newtonian"}
         Haff grain flow (unknown ln(p/p0), the paper) or a Newtonian liquid (unknown: gauge p).
     viscosity : float
@@ -136,6 +140,7 @@ class LubricationParameters:
     roughness: RoughnessGeometry
     kinematics: Kinematics
     flow_factor_floor: float = 0.05
+    flow_factor_continuation: float = 0.0
     slurry_model: str = "granular"
     viscosity: float = 5e-3
     groove_venting: float = 0.0
@@ -143,6 +148,10 @@ class LubricationParameters:
     def __post_init__(self) -> None:
         if self.slurry_model not in SLURRY_MODELS:
             raise ValueError(f"slurry_model must be one of {SLURRY_MODELS}; got {self.slurry_model!r}")
+        if not (np.isfinite(self.flow_factor_continuation) and 0.0 <= self.flow_factor_continuation < 1.0):
+            raise ValueError(
+                f"flow_factor_continuation must be finite and in [0, 1) (valid range: [0, 1)); got {self.flow_factor_continuation!r}"
+            )
         if not (np.isfinite(self.viscosity) and self.viscosity > 0):
             raise ValueError(f"slurry_viscosity must be finite and > 0 Pa s (valid range: (0, inf)); got {self.viscosity!r}")
         if not (np.isfinite(self.groove_venting) and self.groove_venting >= 0):
@@ -189,7 +198,7 @@ def lubrication_coefficients(h, x, y, params: LubricationParameters, velocities=
     hs = h / rough.sigma
     c, f, g = params.rheology.film_coefficients(h, params)
     pxx, pxy, pyy = pressure_flow_factors(hs, f, g, rough)
-    pxx, pxy, pyy, floored = regularize_pressure_tensor(pxx, pxy, pyy, params.flow_factor_floor)
+    pxx, pxy, pyy, floored = regularize_pressure_tensor(pxx, pxy, pyy, params.flow_factor_floor, params.flow_factor_continuation)
     sxx, sxy, syy = shear_flow_factors(hs, f, rough)
     umx, umy, dux, duy = params.kinematics.mean_and_relative(x, y) if velocities is None else velocities
     half_sigma = 0.5 * rough.sigma

@@ -90,6 +90,7 @@ def physical_setup(config: Config) -> PhysicalSetup:
         roughness=rough,
         kinematics=kin,
         flow_factor_floor=c.flow_factor_floor,
+        flow_factor_continuation=c.flow_factor_continuation,
         slurry_model=c.slurry_model,
         viscosity=c.newtonian_viscosity,
         groove_venting=groove_venting(c.pad_groove_pitch, c.pad_groove_width),
