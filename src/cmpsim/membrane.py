@@ -169,7 +169,7 @@ def solve_bending(
             except ValueError:  # no Newton step: the fixed-point step alone
                 newton = None
             # The preconditioner is the linearised problem of a local pressure response, so the Newton step is of
-            # the size of the fixed-point step F; one orders of magnitude longer comes from a nearly singular
+            # the size of the fixed-point step F; a step orders of magnitude longer comes from a nearly singular
             # linearisation (a cell at a kink of the pressure's response), not from the problem: take F instead.
             candidates = [("fixed-point", f)]
             if newton is not None and np.all(np.isfinite(newton)) and np.max(np.abs(newton)) <= MAX_STEP_RATIO * size:
