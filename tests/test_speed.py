@@ -26,10 +26,10 @@ import scipy.sparse as sp
 import cmpsim
 from cmpsim.config import Config
 from cmpsim.equilibrium import solve_equilibrium
+from cmpsim.fvassembly import _operator_entries
 from cmpsim.reynolds import (
     LinearSolveStats,
     ReynoldsSystem,
-    _operator_entries,
     assemble_operator,
     assembly_map,
     factorize,
@@ -126,7 +126,7 @@ def test_assembly_map_sums_the_entries_it_was_built_from():
     coeffs = pr.face_coefficients(pr.contact_only_start())
     rows, cols, src, w = _operator_entries(pr.grid)
     amap = assembly_map(pr.grid)
-    from cmpsim.reynolds import _stacked_components
+    from cmpsim.fvassembly import _stacked_components
 
     c = _stacked_components(amap, coeffs)
     N = pr.grid.size
