@@ -51,9 +51,9 @@ def ring_table(foundation, radius: float, ring: tuple) -> CubicSpline:
     integral is evaluated at :data:`RING_TABLE` radii r_j = R (1 - s_j^2), s_j equally spaced
     (spacing 2R/n at the centre, R/n^2 at the edge, where the deflection turns over the pad's
     coupling length), and interpolated by a cubic spline. On the 300mm preset's pad and ring the
-    spline is within 7e-7 of the integral at 500 random radii (1e-6 relative: 0.4 pm of 4 um),
-    where the 1024 equally spaced radii with linear interpolation it replaced were within 2.2e-4
-    and cost ten times as much (tests/test_ring.py). Cached: every solve of a study on the same
+    spline is within 6.7e-7 of the integral's largest value at 500 random radii (about 3 pm of
+    4 um), where the 1024 equally spaced radii with linear interpolation it replaced were within
+    2.2e-4 and cost ten times as much (tests/test_retaining_ring.py checks 1e-6). Cached: every solve of a study on the same
     pad, wafer and ring shares the table.
     """
     inner, outer, pressure = ring
