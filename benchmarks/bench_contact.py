@@ -1,6 +1,6 @@
 """Benchmark: vectorised asperity contact vs. per-point adaptive quadrature.
 
-Times :func:`cmpsim.contact.asperity_contact` on N separations (default 20,000, from -4 to
+Times :func:`cmpsim.physics.contact.asperity_contact` on N separations (default 20,000, from -4 to
 2.999 sigma_s) against a baseline that evaluates the same integrals point by point with
 ``scipy.integrate.quad`` (QAGS, epsabs=0, epsrel=1e-12): for each separation D, the load
 and the area of each regime, on the bands [D, D + omega_e], [D + omega_e, D + omega_p] and
@@ -8,7 +8,7 @@ and the area of each regime, on the bands [D, D + omega_e], [D + omega_e, D + om
 agree to 1e-8 relative (pressure and the three area ratios), then prints the speed-up ratio
 measured in this run and the largest relative difference. Exits with status 1 if the
 agreement check fails. For information it also times the solver's path, a
-:class:`cmpsim.contact.ContactTable` of the same pad (build once, then interpolate).
+:class:`cmpsim.physics.contact.ContactTable` of the same pad (build once, then interpolate).
 
 Run:  python benchmarks/bench_contact.py [--points 20000] [--baseline-points N] [--model lep]
 
@@ -29,7 +29,7 @@ import numpy as np
 from scipy.integrate import quad
 from scipy.special import ndtr
 
-from cmpsim.contact import PLASTIC_RATIO, ContactTable, PadSurface, asperity_contact
+from cmpsim.physics.contact import PLASTIC_RATIO, ContactTable, PadSurface, asperity_contact
 
 TOL = 1e-8
 

@@ -14,8 +14,8 @@ import statistics
 import time
 
 import cmpsim
-from cmpsim.model import build_problem, solve
-from cmpsim.reynolds import ReynoldsSystem
+from cmpsim.solver.model import build_problem, solve
+from cmpsim.operators.reynolds import ReynoldsSystem
 
 
 def best_of(fn, repeat):

@@ -17,7 +17,7 @@ Two measurements, both as ratios (never absolute times):
 2. **GMRES of the layered pad, scipy vs hand-written.** In this checkout, the Newton systems of
    one equilibrium of the coupled (phi, w) solve of the layered pad (``Config.paper()`` with
    ``pad_compliance = "layer"``, default grid) are solved with the hand-written unrestarted
-   GMRES :func:`cmpsim.compliance._gmres` and with ``scipy.sparse.linalg.gmres`` (same Krylov
+   GMRES :func:`cmpsim.operators.compliance._gmres` and with ``scipy.sparse.linalg.gmres`` (same Krylov
    space: ``restart`` = 200, one cycle, same relative tolerance), alternately, best of
    ``--repeat`` each. The hand-written one stays only while scipy's is slower here.
 """
@@ -43,7 +43,7 @@ CHILD = r"""
 import json, sys, time, warnings
 warnings.simplefilter("ignore")
 import cmpsim
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 repeat = int(sys.argv[1])
 cases = {
     "default": Config.default(),
@@ -96,7 +96,7 @@ def keep_best(kept: dict | None, new: dict) -> dict:
 
 
 def scipy_gmres(matvec, b, x0, rtol: float, max_iter: int) -> np.ndarray:
-    """The same solve as :func:`cmpsim.compliance._gmres` by ``scipy.sparse.linalg.gmres`` (no restart)."""
+    """The same solve as :func:`cmpsim.operators.compliance._gmres` by ``scipy.sparse.linalg.gmres`` (no restart)."""
     from scipy.sparse.linalg import LinearOperator, gmres
 
     op = LinearOperator((b.size, b.size), matvec=matvec, dtype=float)
@@ -108,10 +108,10 @@ def scipy_gmres(matvec, b, x0, rtol: float, max_iter: int) -> np.ndarray:
 
 def bench_gmres(repeat: int) -> tuple[float, float, float, int]:
     """(best scipy s, best hand-written s, max relative difference of the steps, Newton systems) on the layered pad."""
-    from cmpsim import compliance
-    from cmpsim.config import Config
-    from cmpsim.equilibrium import solve_equilibrium
-    from cmpsim.model import build_problem
+    from cmpsim.operators import compliance
+    from cmpsim.inputs.config import Config
+    from cmpsim.solver.equilibrium import solve_equilibrium
+    from cmpsim.solver.model import build_problem
 
     problem = build_problem(Config.paper().replace(pad_compliance="layer"))
     systems = []

@@ -8,7 +8,7 @@ One process, the cases alternating round by round, each keeping its best CPU tim
 * ``paper 3in 24x64``: the paper preset, the reference time of issue 23's 3-inch criterion
   (the default model at most 1.5x the paper preset's time on the same grid);
 * ``default 3in 24x64``: the default model (Winkler pad, Newtonian slurry, abrasive law) on the
-  same equal-ring grid, solved by the joint Newton (``cmpsim.jointnewton``);
+  same equal-ring grid, solved by the joint Newton (``cmpsim.operators.jointnewton``);
 * ``... nested``: the same with ``WinklerPad.joint = False`` (the nested solve: a coupled state
   at every trial position, a factorisation for every Jacobian), also on the default grid at
   3 in and at 300 mm (``wafer_diameter = 300 mm``, ``centre_distance = 0.2 m``).
@@ -28,7 +28,7 @@ import time
 from pathlib import Path
 
 import cmpsim
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 from cmpsim.models.pads import WinklerPad
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -35,10 +35,10 @@ CHILD = r"""
 import json, sys, time
 import cmpsim
 try:
-    from cmpsim.padgrid import _LAYER_OPERATORS as LAYER_CACHE  # after issue 23
+    from cmpsim.numerics.padgrid import _LAYER_OPERATORS as LAYER_CACHE  # after issue 23
 except ImportError:
-    from cmpsim.padstack import _LAYER_OPERATORS as LAYER_CACHE
-from cmpsim.config import Config
+    from cmpsim.physics.padstack import _LAYER_OPERATORS as LAYER_CACHE
+from cmpsim.inputs.config import Config
 
 repeat, cases = int(sys.argv[1]), json.loads(sys.argv[2])
 cmpsim.solve(Config.default().replace(grid="coarse"), relative=False)  # imports, contact tables

@@ -63,7 +63,7 @@ PRESET = {"300mm preset": ("solve", {"preset": "300mm"}), "300mm preset tune-zon
 CHILD = r"""
 import json, sys, time
 import cmpsim
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 
 repeat, cases, keep = int(sys.argv[1]), json.loads(sys.argv[2]), json.loads(sys.argv[3])
 cmpsim.solve(Config.default().replace(grid="coarse"), relative=False)  # imports, contact tables

@@ -33,7 +33,7 @@ def naive_count() -> int:
 
 
 def run(grid: str, cold: bool = False):
-    import cmpsim.studies as v  # the study runner: every point of the run goes through its solve_point
+    import cmpsim.solver.points as v  # the study runner: every point of the run goes through its solve_point
 
     original = v.solve_point
     if cold:

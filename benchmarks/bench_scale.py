@@ -50,8 +50,8 @@ REPO = Path(__file__).resolve().parents[1]
 CHILD = r"""
 import json, sys, time
 import cmpsim
-import cmpsim.model as model
-from cmpsim.config import Config
+import cmpsim.solver.model as model
+from cmpsim.inputs.config import Config
 
 repeat, cases = int(sys.argv[1]), json.loads(sys.argv[2])
 KEEP = ("removal_rate_mean", "within_wafer_nonuniformity", "h0", "attack_angle", "cross_tilt",

@@ -41,7 +41,7 @@ REPO = Path(__file__).resolve().parents[1]
 CHILD = r"""
 import json, sys, time, tempfile
 import cmpsim
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 
 repeat, do_reproduce = int(sys.argv[1]), sys.argv[2] == "1"
 paper = Config.paper() if hasattr(Config, "paper") else Config.default()

@@ -169,7 +169,7 @@ def _page(script: Path, out: Path, stdout: str, elapsed: float) -> str:
 
 def _grid_text(grid: str) -> str:
     try:
-        from cmpsim.config import GRID_PRESETS
+        from cmpsim.inputs.config import GRID_PRESETS
 
         if grid in GRID_PRESETS:
             nr, nt = GRID_PRESETS[grid]

@@ -202,7 +202,7 @@ def pictures() -> dict[str, str]:
         edges,
         [
             (GREY, "imports a room on a floor below"),
-            (BLUE, "imports a room on the same floor (the studies use the one runner, cmpsim.studies)"),
+            (BLUE, "imports a room on the same floor (the studies use the one runner, cmpsim.solver.points)"),
             (RED, "imports upwards: none (tests/test_house.py fails first)"),
         ],
         "The rule: nothing imports upwards; the kernels import nothing of cmpsim; io and _version serve every floor.",

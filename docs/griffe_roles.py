@@ -1,6 +1,6 @@
 """Griffe extension for the API reference: Sphinx cross-reference roles -> mkdocstrings links.
 
-cmpsim's docstrings use Sphinx roles (``:func:`solve```, ``:class:`~cmpsim.config.Config```,
+cmpsim's docstrings use Sphinx roles (``:func:`solve```, ``:class:`~cmpsim.inputs.config.Config```,
 ``:meth:`Config.default```), which Markdown would print literally. Once the package is
 loaded, this extension rewrites each role in every docstring:
 

@@ -100,7 +100,7 @@ def test_provenance_names_model_version_and_every_parameter_with_its_source():
 
 
 def test_summary_lists_every_scalar_with_its_display_unit():
-    from cmpsim.result import SCALARS
+    from cmpsim.results.result import SCALARS
 
     r = cmpsim.solve(grid="coarse")
     # plain text: "name   value  unit" on one line, the meaning wrapped on the lines below the name

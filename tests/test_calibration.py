@@ -6,7 +6,7 @@ from click.testing import CliRunner
 
 from cmpsim.calibration import CalibrationError, calibrate
 from cmpsim.cli import main
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 from cmpsim.testing import synthetic_dataset
 
 BASE = Config.default().replace(grid="coarse")

@@ -6,7 +6,7 @@ import pytest
 from click.testing import CliRunner
 
 from cmpsim.cli import load_config, main
-from cmpsim.config import PARAMETERS, PRESETS, Config, zone_mean_pressure
+from cmpsim.inputs.config import PARAMETERS, PRESETS, Config, zone_mean_pressure
 
 PSI = 6894.757293168361
 FIVE_ZONES = dict(carrier="membrane", wafer_diameter="300 mm", zone_radii="50,100,130,145,150 mm")

@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 import scipy.sparse.linalg as spla
 
-from cmpsim.cavitation import CavitationSystem, solve_complementarity, upwind_couette_matrix
-from cmpsim.config import Config
-from cmpsim.equilibrium import WaferProblem
-from cmpsim.flowfactors import RoughnessGeometry
-from cmpsim.grid import PolarGrid
-from cmpsim.kinematics import Kinematics
+from cmpsim.operators.cavitation import CavitationSystem, solve_complementarity, upwind_couette_matrix
+from cmpsim.inputs.config import Config
+from cmpsim.solver.equilibrium import WaferProblem
+from cmpsim.physics.flowfactors import RoughnessGeometry
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.physics.kinematics import Kinematics
 from cmpsim.testing.lubrication import gumbel_load, jfo_diverging_slider, linear_film_pressure, strip_problem
-from cmpsim.reynolds import LubricationParameters, ReynoldsSystem, face_fluxes, flux_divergence
-from cmpsim.setup import build_problem
+from cmpsim.operators.reynolds import LubricationParameters, ReynoldsSystem, face_fluxes, flux_divergence
+from cmpsim.solver.setup import build_problem
 
 ETA, U, L = 5e-3, 0.6, 0.05
 H1, H2 = 30e-6, 60e-6  # diverging slider: sub-ambient full-Sommerfeld pressure down to -41 kPa

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.compliance import (
+from cmpsim.operators.compliance import (
     LayeredFoundation,
     PadLayer,
     WinklerFoundation,
@@ -22,12 +22,12 @@ from cmpsim.compliance import (
     layer_stiffness,
     local_deflection,
 )
-from cmpsim.config import PRESETS, Config
-from cmpsim.geometry import film_thickness
-from cmpsim.grid import PolarGrid
-from cmpsim.padgrid import layer_deflection, layer_operator
-from cmpsim.model import build_problem
-from cmpsim.setup import pad_foundation
+from cmpsim.inputs.config import PRESETS, Config
+from cmpsim.physics.geometry import film_thickness
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.numerics.padgrid import layer_deflection, layer_operator
+from cmpsim.solver.model import build_problem
+from cmpsim.solver.setup import pad_foundation
 from cmpsim.testing.checks import central_difference_jacobian
 
 COMPLIANT = {"pad_compliance": "winkler"}
@@ -53,7 +53,7 @@ def wiwnu(result, edge_exclusion: float | None = None) -> float:
     """The registry's within-wafer non-uniformity, or the same with another edge exclusion."""
     if edge_exclusion is None:
         return result.within_wafer_nonuniformity
-    from cmpsim.uniformity import uniformity
+    from cmpsim.results.uniformity import uniformity
 
     return uniformity(result.removal_rate_profile, result.grid.radius, edge_exclusion)[0]
 
@@ -332,9 +332,9 @@ def test_layered_pad_outputs_converge_with_the_grid():
 
 def test_the_layered_pads_preconditioner_keeps_gmres_short(monkeypatch):
     # the coupled system with a sparse (Laplacian) stand-in for the pad's stiffness preconditions
-    # GMRES (cmpsim.padgrid); with the Winkler bed as preconditioner the same solve took 31-70
+    # GMRES (cmpsim.numerics.padgrid); with the Winkler bed as preconditioner the same solve took 31-70
     # iterations per system on the default model (docs/performance.md)
-    import cmpsim.compliance as compliance
+    import cmpsim.operators.compliance as compliance
 
     counts = []
     gmres = compliance._gmres
@@ -433,7 +433,7 @@ def test_with_the_floor_alone_the_coarse_layered_film_ends_short_of_balance_and_
 def _film_deflection_matrix(problem, st):
     """The film-deflection Newton matrix of a coupled state, dense and scaled (cells: slurry unknown on
     the applied pressure, deflection on sigma; rows: Reynolds on its diagonal, balance on k sigma)."""
-    import cmpsim.compliance as compliance
+    import cmpsim.operators.compliance as compliance
 
     lin = compliance._linearise(problem, st.coupling[1], compliance._face_operators(problem.grid))
     k, deflect = lin.layer[:2]
@@ -455,7 +455,7 @@ def test_with_the_floor_alone_the_coarse_layered_film_deflection_branch_turns_ba
     # the coarse layered default at zero tilt in h0 by pseudo-arclength continuation (Keller); the
     # branch turns back (h0 rises again) where the Newton matrix's determinant changes sign, with the
     # number of floored faces unchanged through the turn (38): a smooth saddle-node, not the floor's kink
-    import cmpsim.compliance as compliance
+    import cmpsim.operators.compliance as compliance
 
     problem = build_problem(Config.default().replace(grid="coarse", pad_compliance="layer", flow_factor_continuation=0.0))
     sigma, pa = problem.sigma, problem.applied_pressure

@@ -2,7 +2,7 @@
 
 JFO on a Winkler or layered pad is a capability of the model classes: the cavitation model
 (:class:`cmpsim.models.slurries.JFOCavitation`) gives the coupled solve of
-:mod:`cmpsim.compliance` its residual (the mass balance A p + B theta + c of every cell) and
+:mod:`cmpsim.operators.compliance` its residual (the mass balance A p + B theta + c of every cell) and
 that residual's derivatives, in the universal variable psi; the solver has no JFO branch.
 Claims checked here: mass balance per cell and through the wafer edge, the complementarity
 p >= p_cav, theta <= 1, (p - p_cav)(1 - theta) = 0 held exactly, the limit "nothing
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.cavitation import CavitationSystem
-from cmpsim.model import build_problem
-from cmpsim.reynolds import face_fluxes
+from cmpsim.operators.cavitation import CavitationSystem
+from cmpsim.solver.model import build_problem
+from cmpsim.operators.reynolds import face_fluxes
 
 #: Cavitation pressures that make each pad cavitate on the default model: the Winkler pad's
 #: film ruptures in a few cells at ambient pressure, the layered pad's suction (docs/model.md,
@@ -39,7 +39,7 @@ def cavitating(request):
 
 
 def _mass_system(result):
-    """The JFO system of the state's deformed film on its cavitated set, built by :mod:`cmpsim.cavitation`."""
+    """The JFO system of the state's deformed film on its cavitated set, built by :mod:`cmpsim.operators.cavitation`."""
     st = result.solution.state
     coeffs = st.coupling[1].coeffs
     return CavitationSystem(result.grid, coeffs, result.config.cavitation_pressure, cavitated=st.cavitated), coeffs
@@ -172,7 +172,7 @@ def test_layered_default_suction_comes_from_the_edge_band_and_vanishes_with_the_
 
 
 def test_on_the_graded_grid_the_layered_pad_recovers_its_winkler_limit_and_agrees_with_equal_rings():
-    # the layered pad's operator integrates its kernel over each polar cell (cmpsim.padinfluence), so
+    # the layered pad's operator integrates its kernel over each polar cell (cmpsim.physics.padinfluence), so
     # the edge-graded rim rings are resolved as they are: a coupling length far below a cell gives
     # the Winkler bed's answer on the graded default preset too (it gave -16 % against +15 % when
     # the operator took the widest ring's spacing), and the graded and equal-ring grids agree

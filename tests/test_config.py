@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cmpsim.config import GRID_PRESETS, PARAMETERS, Config, parameter_table_markdown, parse_value
+from cmpsim.inputs.config import GRID_PRESETS, PARAMETERS, Config, parameter_table_markdown, parse_value
 
 
 def test_values_take_units_and_are_stored_in_si():
@@ -120,7 +120,7 @@ def test_a_named_grid_means_one_rim_ring_width_on_every_wafer():
     """Issue 23: the named grids are graded towards the edge with the rim ring of GRID_EDGE on
     3-inch and 300 mm wafers alike; the central rings are R/GRID_PRESETS rings wide; each
     preset halves the rings of the coarser one (same ring map)."""
-    from cmpsim.config import GRID_EDGE
+    from cmpsim.inputs.config import GRID_EDGE
 
     for name, (edge, growth) in GRID_EDGE.items():
         for d, c in ((0.0762, 0.1524), (0.3, 0.2)):
@@ -144,7 +144,7 @@ def test_parameter_table_in_model_document_is_generated_from_the_registry():
 
 
 def test_paper_preset_differs_from_the_defaults_exactly_in_the_listed_inputs():
-    from cmpsim.config import PRESETS
+    from cmpsim.inputs.config import PRESETS
 
     paper, default = Config.paper().to_dict(), Config.default().to_dict()
     changed = {k for k in default if paper[k] != default[k]}
@@ -200,7 +200,7 @@ def test_an_old_granular_density_sets_the_solids_loading_and_a_contradiction_is_
 
 
 def test_the_viscosity_follows_the_loading_by_krieger_dougherty_unless_set():
-    from cmpsim.materials import krieger_dougherty
+    from cmpsim.physics.materials import krieger_dougherty
 
     c = Config.default()
     dense = c.replace(solids_loading="30 %")

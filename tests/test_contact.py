@@ -17,7 +17,7 @@ import mpmath as mp
 import numpy as np
 import pytest
 
-from cmpsim.contact import ContactTable, PadSurface, asperity_contact, asperity_laws
+from cmpsim.physics.contact import ContactTable, PadSurface, asperity_contact, asperity_laws
 from cmpsim.testing.references import _mp_pad, contact_reference_mp, laws_mp
 
 #: The feasibility prototype's pad: omega_e = 0.20 sigma, omega_p = 11 sigma.

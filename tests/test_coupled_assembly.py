@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from cmpsim.abrasion import interference, pad_gap
-from cmpsim.grid import PolarGrid, face_operators
-from cmpsim.coupling import coupled_newton_matrices
-from cmpsim.reynolds import FaceCoefficients, assemble_operator, flux_divergence, own_face_fluxes
+from cmpsim.physics.abrasion import interference, pad_gap
+from cmpsim.numerics.grid import PolarGrid, face_operators
+from cmpsim.operators.coupling import coupled_newton_matrices
+from cmpsim.operators.reynolds import FaceCoefficients, assemble_operator, flux_divergence, own_face_fluxes
 
 
 def _random_coefficients(grid, rng):

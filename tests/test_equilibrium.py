@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.equilibrium import EquilibriumError, solve_equilibrium
-from cmpsim.model import build_problem
+from cmpsim.solver.equilibrium import EquilibriumError, solve_equilibrium
+from cmpsim.solver.model import build_problem
 
 PAPER = cmpsim.Config.paper()
 
@@ -163,7 +163,7 @@ def test_removal_rate_with_particle_size_is_documented_as_not_reproduced(trends)
 
 
 def test_root_scan_finds_the_unique_lep_equilibrium(base):
-    from cmpsim.equilibrium import scan_moment_roots
+    from cmpsim.solver.equilibrium import scan_moment_roots
 
     scan = scan_moment_roots(base.problem, base.solution)
     assert len(scan.roots) == 1
@@ -208,9 +208,9 @@ def test_a_diverging_trial_film_in_the_hydrodynamic_start_is_not_reported_as_bad
 def test_wafer_problem_solves_every_pressure_with_the_injected_solver_and_solve_reuses_a_built_problem(preset):
     """Also on the default's compliant pad with Gumbel cavitation (the coupled pad solve used to
     ignore the injected solver)."""
-    from cmpsim.equilibrium import WaferProblem
-    from cmpsim.reynolds import factorize
-    from cmpsim.setup import physical_setup
+    from cmpsim.solver.equilibrium import WaferProblem
+    from cmpsim.operators.reynolds import factorize
+    from cmpsim.solver.setup import physical_setup
 
     calls = []
 

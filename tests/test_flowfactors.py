@@ -13,7 +13,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cmpsim.flowfactors import (
+from cmpsim.physics.flowfactors import (
     RoughnessGeometry,
     continue_pressure_eigenvalues,
     orientation_coefficients,
@@ -23,7 +23,7 @@ from cmpsim.flowfactors import (
     shear_flow_factors,
     shear_stress_factors,
 )
-from cmpsim.grainflow import grain_coefficients
+from cmpsim.physics.grainflow import grain_coefficients
 from cmpsim.testing.references import omega_eq16, printed_flow_factors, psi_eq17
 
 SQRT_1_5 = math.sqrt(1.5)

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cmpsim.geometry import check_geometry, curvature_radius, film_thickness, film_thickness_1d
+from cmpsim.physics.geometry import check_geometry, curvature_radius, film_thickness, film_thickness_1d
 
 R_W = 0.0381  # 3-inch wafer radius, m
 DOME = 5e-6  # paper base case dome height, m

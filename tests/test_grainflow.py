@@ -15,7 +15,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cmpsim.grainflow import damping_ratio, grain_coefficients
+from cmpsim.physics.grainflow import damping_ratio, grain_coefficients
 from cmpsim.testing.references import printed_forms_mp
 
 X_GRID = np.logspace(-8, 3, 40)
@@ -139,7 +139,7 @@ def test_outputs_broadcast_h_over_d_against_w_over_k():
 
 
 def test_grain_flow_object_gives_haffs_laws_with_viscosity_over_pressure_equal_to_a_d_over_t_v():
-    from cmpsim.grainflow import GrainFlow, granular_pressure
+    from cmpsim.physics.grainflow import GrainFlow, granular_pressure
 
     gf = GrainFlow(particle_diameter=100e-9, w_over_k=4e-6, t_over_a=2.0, fluctuation_velocity=1.9)
     p = gf.pressure(134.0, 67.0, t=1.0)

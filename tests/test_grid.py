@@ -5,8 +5,8 @@ import pytest
 
 import cmpsim
 from cmpsim import Config
-from cmpsim.grid import PolarGrid, graded_ring_faces, ring_count
-from cmpsim.reynolds import FaceCoefficients, ReynoldsSystem
+from cmpsim.numerics.grid import PolarGrid, graded_ring_faces, ring_count
+from cmpsim.operators.reynolds import FaceCoefficients, ReynoldsSystem
 
 R = 0.0381
 

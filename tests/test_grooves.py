@@ -13,9 +13,9 @@ import sympy
 
 import cmpsim
 from cmpsim import Config
-from cmpsim.grid import PolarGrid
-from cmpsim.grooves import groove_venting
-from cmpsim.model import build_problem
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.physics.grooves import groove_venting
+from cmpsim.solver.model import build_problem
 from cmpsim.testing.checks import central_difference_jacobian, manufactured_errors
 from cmpsim.testing.lubrication import plane_slider_load
 
@@ -155,12 +155,12 @@ def test_grooved_pad_equilibrium_balances_load_and_moment_to_1e_9(overrides):
 @pytest.mark.parametrize("compliance", ["winkler", "layer"])
 def test_grooved_coupled_jacobian_matches_central_differences(compliance, monkeypatch):
     """The pad-coupled Newton sees the venting's film derivative (a cell term, not a face flux)."""
-    import cmpsim.compliance
+    import cmpsim.operators.compliance
 
     # the layered pad's Newton systems are GMRES solves to LAYER_KRYLOV_RTOL (1e-4), which leaves its
     # Jacobian good to a few 1e-4 only (1.6e-4 here, with eq. 8 continued on 11 % of the faces):
     # solved tightly the linearisation itself is checked (measured: 9e-9, with and without the continuation)
-    monkeypatch.setattr(cmpsim.compliance, "LAYER_KRYLOV_RTOL", 1e-10)
+    monkeypatch.setattr(cmpsim.operators.compliance, "LAYER_KRYLOV_RTOL", 1e-10)
     cfg = Config.default().replace(pad_compliance=compliance, **K_GROOVE)
     solved = cmpsim.solve(cfg)
     problem = build_problem(cfg)
@@ -194,8 +194,8 @@ GROOVED_300MM_CONTRASTS = (0.868, 0.803, 0.700, 0.498, 0.757)
 
 @pytest.mark.slow
 def test_grooved_300mm_preset_zones_move_the_rate_mostly_inside_themselves():
-    from cmpsim.uniformity import uniformity
-    from cmpsim.zone_response import zone_response
+    from cmpsim.results.uniformity import uniformity
+    from cmpsim.head.zone_response import zone_response
 
     response = zone_response(Config.preset("300mm").replace(**K_GROOVE))
     nonuniformity = uniformity(response.profile["rate"], 0.15, 3e-3, edges=response.ring_faces)[0]

@@ -33,26 +33,32 @@ def test_the_solver_rooms_do_not_need_each_other():
 
 
 def test_units_and_config_do_not_need_each_other():
-    """The parameter registry hands its entries to cmpsim.units; units never imports config,
+    """The parameter registry hands its entries to cmpsim.inputs.units; units never imports config,
     not even inside a function (issue 22: the config <-> units circle)."""
     cycles = import_cycles(SRC, top_level_only=False)
-    assert not [c for c in cycles if {"cmpsim.units", "cmpsim.config"} & set(c)], cycles
-    assert "cmpsim.config" not in imports_of(SRC / "units.py", "cmpsim.units")
+    assert not [c for c in cycles if {"cmpsim.inputs.units", "cmpsim.inputs.config"} & set(c)], cycles
+    assert "cmpsim.inputs.config" not in imports_of(SRC / "inputs" / "units.py", "cmpsim.inputs.units")
 
 
 def _package(tmp_path, modules: dict[str, str]):
-    """A package ``cmpsim`` under ``tmp_path`` with the given {module: source}."""
+    """A package ``cmpsim`` under ``tmp_path`` with the given {dotted module: source}: ``"inputs.config"``
+    is the module ``config`` of the subpackage ``inputs`` (its ``__init__`` is made)."""
     root = tmp_path / "cmpsim"
     root.mkdir()
     for name, text in {"__init__": "", **modules}.items():
-        (root / f"{name}.py").write_text(text)
+        *folders, leaf = name.split(".")
+        where = root.joinpath(*folders)
+        where.mkdir(parents=True, exist_ok=True)
+        if folders and not (where / "__init__.py").exists():
+            (where / "__init__.py").write_text("")
+        (where / f"{leaf}.py").write_text(text)
     return root
 
 
 def test_the_cycle_check_sees_imports_inside_functions(tmp_path):
-    root = _package(tmp_path, {"config": "from . import units\n", "units": "def f():\n    from .config import PARAMETERS\n"})
+    root = _package(tmp_path, {"inputs.config": "from . import units\n", "inputs.units": "def f():\n    from .config import PARAMETERS\n"})
     assert import_cycles(root) == []
-    assert import_cycles(root, top_level_only=False) == [["cmpsim.config", "cmpsim.units", "cmpsim.config"]]
+    assert import_cycles(root, top_level_only=False) == [["cmpsim.inputs.config", "cmpsim.inputs.units", "cmpsim.inputs.config"]]
 
 
 def test_every_room_of_the_table_exists_and_every_module_has_a_floor():
@@ -67,16 +73,23 @@ def test_the_rule_catches_an_upward_import(tmp_path):
     """A kernel importing the config, and the solver importing a study, are both reported."""
     root = _package(
         tmp_path,
-        {"config": "", "studies": "", "contact": "from .config import PARAMETERS\n", "equilibrium": "def f():\n    from cmpsim.studies import solve_point\n"},
+        {
+            "inputs.config": "",
+            "head.tuning": "",
+            "physics.contact": "from ..inputs.config import PARAMETERS\n",
+            "solver.equilibrium": "def f():\n    from cmpsim.head.tuning import tune_zones\n",
+            "numerics.grid": "from cmpsim.physics import contact\n",  # downwards: allowed
+        },
     )
     found = violations(root)
-    assert any(v.startswith("cmpsim.contact is a kernel and imports cmpsim.config") for v in found), found
-    assert any(v.startswith("cmpsim.equilibrium imports cmpsim.studies") for v in found), found
+    assert any(v.startswith("cmpsim.physics.contact is a kernel and imports cmpsim.inputs.config") for v in found), found
+    assert any(v.startswith("cmpsim.solver.equilibrium imports cmpsim.head.tuning") for v in found), found
+    assert not [v for v in found if v.startswith("cmpsim.numerics")], found
 
 
 def test_no_module_outside_the_registry_tests_a_model_option_by_name():
     """Each model axis is a family of classes picked by name in cmpsim.models (and checked in
-    cmpsim.config); the solver, the Reynolds assembly and the post-processing ask the objects.
+    cmpsim.inputs.config); the solver, the Reynolds assembly and the post-processing ask the objects.
     On b10a4ba this scan found 17 places (issue 22)."""
     from cmpsim.testing.house import option_name_comparisons
 
@@ -89,8 +102,8 @@ def test_the_option_scan_catches_a_name_test(tmp_path):
     root = _package(
         tmp_path,
         {
-            "config": "ok = cfg.cavitation == 'jfo'\n",  # config checks its inputs: allowed
-            "equilibrium": (
+            "inputs.config": "ok = cfg.cavitation == 'jfo'\n",  # config checks its inputs: allowed
+            "solver.equilibrium": (
                 "a = problem.cavitation == 'jfo'\n"
                 "b = 'granular' != lub.slurry_model\n"
                 "c = config.removal_law in ('paper', 'shear_power')\n"
@@ -107,7 +120,7 @@ def test_the_option_scan_catches_a_name_test(tmp_path):
 def test_every_option_value_has_a_class_behind_its_protocol():
     """The registry covers exactly the values Config accepts, and each class implements its protocol."""
     from cmpsim import models
-    from cmpsim.config import PARAMETERS, Config
+    from cmpsim.inputs.config import PARAMETERS, Config
 
     axes = {
         "pad_compliance": (models.PAD_MODELS, models.PadModel),
@@ -150,3 +163,25 @@ def test_no_room_is_over_about_600_lines():
     """Small modules with one job (issue 22: none over about 600 lines; 650 leaves the 'about')."""
     long = {name: n for name, path in source_modules(SRC).items() if (n := len(path.read_text(encoding="utf-8").splitlines())) > 650}
     assert long == {}, long
+
+
+def test_the_package_face_holds_at_most_eight_modules():
+    """The floors are folders (issue 31): only the package face and the utilities sit in src/cmpsim/."""
+    top = sorted(p.name for p in SRC.glob("*.py"))
+    assert len(top) <= 8, top
+
+
+def test_every_floor_folder_says_what_lives_there_and_what_it_may_import():
+    """Each subpackage's docstring names its floor's contents and the floors it may import."""
+    import ast
+
+    for _, _, rooms in FLOORS:
+        for room in rooms:
+            init = SRC / room / "__init__.py"
+            if room == "cmpsim" or not init.exists():
+                continue
+            doc = ast.get_docstring(ast.parse(init.read_text(encoding="utf-8"))) or ""
+            assert len(doc) > 80, room
+    for room in ("physics", "numerics", "operators", "inputs", "results", "solver", "head"):
+        doc = ast.get_docstring(ast.parse((SRC / room / "__init__.py").read_text(encoding="utf-8")))
+        assert "May import" in doc, room

@@ -1,13 +1,13 @@
-"""The bent wafer in equilibrium (cmpsim.membrane; issue 25)."""
+"""The bent wafer in equilibrium (cmpsim.operators.membrane; issue 25)."""
 
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from cmpsim.grid import PolarGrid
-from cmpsim.membrane import solve_bending
-from cmpsim.plate import KirchhoffPlate, PlateOperator
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.operators.membrane import solve_bending
+from cmpsim.numerics.plate import KirchhoffPlate, PlateOperator
 
 WAFER = KirchhoffPlate(381e-6, 130e9, 0.28)
 A = 0.0381

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.config import Config
-from cmpsim.plate import PlateOperator
+from cmpsim.inputs.config import Config
+from cmpsim.numerics.plate import PlateOperator
 
 GRID = "12x32"
 COMPARED = ("film_thickness_center", "attack_angle", "removal_rate_mean", "within_wafer_nonuniformity", "fluid_load_fraction")

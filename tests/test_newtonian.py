@@ -5,15 +5,15 @@ import pytest
 import scipy.sparse.linalg as spla
 
 import cmpsim
-from cmpsim.config import Config
-from cmpsim.equilibrium import WaferProblem
-from cmpsim.flowfactors import RoughnessGeometry
-from cmpsim.grid import PolarGrid
-from cmpsim.kinematics import Kinematics
+from cmpsim.inputs.config import Config
+from cmpsim.solver.equilibrium import WaferProblem
+from cmpsim.physics.flowfactors import RoughnessGeometry
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.physics.kinematics import Kinematics
 from cmpsim.testing.lubrication import plane_slider_load, plane_slider_pressure, strip_problem
-from cmpsim.removal import newtonian_shear_stress
-from cmpsim.reynolds import LubricationParameters, lubrication_coefficients
-from cmpsim.setup import build_problem, physical_setup
+from cmpsim.physics.removal import newtonian_shear_stress
+from cmpsim.operators.reynolds import LubricationParameters, lubrication_coefficients
+from cmpsim.solver.setup import build_problem, physical_setup
 
 ETA, U = 5e-3, 0.6
 

@@ -14,11 +14,11 @@ import pytest
 from click.testing import CliRunner
 
 import cmpsim
-from cmpsim import outputs
+from cmpsim.results import outputs
 from cmpsim.cli import main
-from cmpsim.grid import PolarGrid
-from cmpsim.result import JSON_SCHEMA_PATH
-from cmpsim.uniformity import ring_areas_inside, ring_edges, ring_mean, uniformity, weighted_range, weighted_std_over_mean
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.results.result import JSON_SCHEMA_PATH
+from cmpsim.results.uniformity import ring_areas_inside, ring_edges, ring_mean, uniformity, weighted_range, weighted_std_over_mean
 
 DATA = Path(__file__).parent / "data"
 TOP_KEYS = {"schema", "cmpsim_version", "inputs", "values", "units", "solver", "profiles"}
@@ -62,7 +62,7 @@ def test_registry_holds_exactly_the_contract_names_in_si_without_units_in_names(
 
 def test_the_output_table_of_the_model_document_is_the_registry():
     doc = (Path(__file__).parents[1] / "docs" / "model.md").read_text(encoding="utf-8")
-    assert outputs.output_table_markdown() in doc, "regenerate section 16 (Outputs) from cmpsim.outputs.output_table_markdown()"
+    assert outputs.output_table_markdown() in doc, "regenerate section 16 (Outputs) from cmpsim.results.outputs.output_table_markdown()"
 
 
 def test_display_factors_are_the_unit_conversions():
@@ -156,7 +156,7 @@ def _check(instance, schema, where="$"):
 
 def test_the_shipped_json_schema_is_generated_from_the_registry_and_the_output_validates(base):
     shipped = JSON_SCHEMA_PATH.read_text(encoding="utf-8")
-    assert shipped == outputs.json_schema_text(), "regenerate with `python -m cmpsim.outputs`"
+    assert shipped == outputs.json_schema_text(), "regenerate with `python -m cmpsim.results.outputs`"
     schema = json.loads(shipped)
     assert set(schema["required"]) == TOP_KEYS and schema["additionalProperties"] is False
     assert set(schema["properties"]["values"]["properties"]) == set(VALUES)
@@ -238,7 +238,7 @@ def test_run_table_is_legible_without_cutting_names(base, width):
 
 @pytest.mark.parametrize("width", [80, 132])
 def test_params_table_is_legible_with_ranges_in_display_units(width):
-    from cmpsim.config import PARAMETERS
+    from cmpsim.inputs.config import PARAMETERS
 
     res = CliRunner().invoke(main, ["params"], env={"COLUMNS": str(width)})
     assert res.exit_code == 0

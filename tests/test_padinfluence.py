@@ -1,4 +1,4 @@
-"""The layered pad's deflection operator on polar cells (cmpsim.padinfluence, docs/model.md section 13c).
+"""The layered pad's deflection operator on polar cells (cmpsim.physics.padinfluence, docs/model.md section 13c).
 
 Claims: the cell integrals of the kernel reproduce the deflection of a uniformly loaded disc
 (Hankel transform; mpmath at high precision in the slow test), converge at second order on
@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 from scipy.special import jv
 
-from cmpsim.config import Config
-from cmpsim.grid import PolarGrid, graded_ring_faces
-from cmpsim.padgrid import layer_deflection, layer_operator
-from cmpsim.padinfluence import angular_modes, apply_modes, radial_primitive, ring_influence
-from cmpsim.padstack import LayeredFoundation, PadLayer
-from cmpsim.setup import pad_foundation
+from cmpsim.inputs.config import Config
+from cmpsim.numerics.grid import PolarGrid, graded_ring_faces
+from cmpsim.numerics.padgrid import layer_deflection, layer_operator
+from cmpsim.physics.padinfluence import angular_modes, apply_modes, radial_primitive, ring_influence
+from cmpsim.physics.padstack import LayeredFoundation, PadLayer
+from cmpsim.solver.setup import pad_foundation
 
 R = 0.0381
 

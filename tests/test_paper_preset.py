@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 
 import cmpsim
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "paper_preset_reference.json").read_text())
 #: Solver diagnostics: residuals are round-off sized and not results.

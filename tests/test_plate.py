@@ -1,11 +1,11 @@
-"""The wafer as a free Kirchhoff plate on the polar grid (cmpsim.plate; issue 25)."""
+"""The wafer as a free Kirchhoff plate on the polar grid (cmpsim.numerics.plate; issue 25)."""
 
 import numpy as np
 import pytest
 from scipy.special import jv
 
-from cmpsim.grid import PolarGrid
-from cmpsim.plate import KirchhoffPlate, PlateOperator, bending_stiffness, zone_load
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.numerics.plate import KirchhoffPlate, PlateOperator, bending_stiffness, zone_load
 from cmpsim.testing.plates import free_plate_balanced_load, winkler_bessel_mode
 
 WAFER = KirchhoffPlate(381e-6, 130e9, 0.28)  # 3-inch silicon wafer (SEMI M1; Hopcroft et al. 2010)
@@ -128,7 +128,7 @@ def test_on_an_edge_graded_grid_the_balances_stay_the_solvability_conditions_and
     relief the exact rigid-body part of the load, and the error against the Winkler closed form
     falls under refinement (0.12 % to 0.017 %; the graded family does not refine uniformly, so the
     observed order, 0.7-1.3, is not a clean second order: docs/model.md, section 13f)."""
-    from cmpsim.grid import edge_graded_grid
+    from cmpsim.numerics.grid import edge_graded_grid
 
     g = edge_graded_grid(A, 24, 32, 0.3e-3, 0.15)
     q = _load(g)

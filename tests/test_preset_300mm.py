@@ -5,7 +5,7 @@ import pytest
 from click.testing import CliRunner
 
 from cmpsim.cli import PRESET_NAMES, load_config, main
-from cmpsim.config import PRESETS, Config, zone_mean_pressure
+from cmpsim.inputs.config import PRESETS, Config, zone_mean_pressure
 
 PSI = 6894.757293168361
 # Measured on the preset (default grid; docs/model.md 13f and docs/validation.md quote them): the
@@ -66,13 +66,13 @@ def test_the_ring_of_the_300mm_preset_is_refused_on_a_local_pad():
 @pytest.fixture(scope="module")
 def response():
     """The zone response of the preset at uniform zones; its base solve is the preset's equilibrium."""
-    from cmpsim.zone_response import zone_response
+    from cmpsim.head.zone_response import zone_response
 
     return zone_response(Config.preset("300mm"))
 
 
 def _nonuniformity(profile, faces, edge_exclusion=3e-3):
-    from cmpsim.uniformity import uniformity
+    from cmpsim.results.uniformity import uniformity
 
     return uniformity(profile["rate"], 0.15, edge_exclusion, edges=faces)[0]
 
@@ -115,7 +115,7 @@ def test_the_contrast_gains_and_the_bending_length_of_the_preset_are_as_document
 @pytest.mark.slow
 def test_without_the_slurrys_hydrodynamic_stiffness_the_preset_zones_steer_their_own_rate():
     """docs/model.md 13f: the layered preset with the slurry 5000 times thinner; the plate's step on its bed."""
-    from cmpsim.zone_response import zone_response
+    from cmpsim.head.zone_response import zone_response
 
     thin = zone_response(Config.preset("300mm").replace(slurry_viscosity=1e-6))
     assert [1e3 * b.width for b in thin.boundaries] == pytest.approx([24.5, 22.1, 16.0, 7.2], abs=0.051)

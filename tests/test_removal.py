@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.removal import shear_power_removal_rate
+from cmpsim.physics.removal import shear_power_removal_rate
 
 
 def test_shear_power_law_is_prestons_law_in_full_contact():
@@ -53,7 +53,7 @@ def test_shear_power_removal_of_the_default_model_is_the_shear_power_of_the_cont
 def test_the_reference_case_is_solved_only_when_its_ratio_is_wanted(monkeypatch):
     """Issue 23: removal_rate_relative (and its reference solve) comes by default with the paper's
     removal law only; the predictive default gives it when asked, and its JSON omits it otherwise."""
-    import cmpsim.model as model
+    import cmpsim.solver.model as model
 
     solved = []
     monkeypatch.setattr(model, "_REFERENCE_CACHE", {})

@@ -80,7 +80,7 @@ def test_relative_removal_rate_is_the_removal_rate_over_that_of_the_papers_refer
     """Every point of Figs. 11-12 is divided by the removal rate of case (a) at 4 psi and 60 rpm,
     and that point is the reference case `cmpsim.solve` uses (LEP, 100 nm, 15 um, 4 psi, 60 rpm)."""
     import cmpsim
-    from cmpsim.model import REFERENCE_CASE
+    from cmpsim.solver.model import REFERENCE_CASE
 
     rows = report.figure(11).rows + report.figure(12).rows
     (ref,) = {r["removal_rate_nm_per_min"] for r in rows if r["curve"] == "a" and r["applied_pressure_psi"] == pytest.approx(4.0) and r["rotation_speed_rpm"] == pytest.approx(60.0)}
@@ -92,7 +92,7 @@ def test_relative_removal_rate_is_the_removal_rate_over_that_of_the_papers_refer
 
 
 def test_identical_points_are_solved_once_and_their_pressure_solves_counted_once(report):
-    from cmpsim.studies import config_key
+    from cmpsim.solver.points import config_key
 
     points = [p for pts in report.data.curves.values() for p in pts]
     distinct = {config_key(p.config): p for p in points}  # the reference case is one of them

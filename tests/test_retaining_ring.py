@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.config import Config
-from cmpsim.grid import PolarGrid
-from cmpsim.padgrid import layer_deflection, layer_operator
-from cmpsim.setup import pad_foundation
+from cmpsim.inputs.config import Config
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.numerics.padgrid import layer_deflection, layer_operator
+from cmpsim.solver.setup import pad_foundation
 
 PSI = 6894.757293168361
 

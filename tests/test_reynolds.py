@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 import sympy
 
-from cmpsim.grid import PolarGrid
-from cmpsim.reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.operators.reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator
 from cmpsim.testing.checks import manufactured_errors
 
 R = 0.0381

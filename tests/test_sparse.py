@@ -1,4 +1,4 @@
-"""The guarded sparse LU (cmpsim.sparse): ordering kept, residual checked, partial pivoting as fall-back."""
+"""The guarded sparse LU (cmpsim.numerics.sparse): ordering kept, residual checked, partial pivoting as fall-back."""
 
 import logging
 
@@ -6,9 +6,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from cmpsim import Config
-from cmpsim.equilibrium import solve_equilibrium
-from cmpsim.model import build_problem, physical_setup
-from cmpsim.sparse import BACKWARD_ERROR_LIMIT, FALLBACKS, GuardedFactor, backward_error, factorize
+from cmpsim.solver.equilibrium import solve_equilibrium
+from cmpsim.solver.model import build_problem, physical_setup
+from cmpsim.numerics.sparse import BACKWARD_ERROR_LIMIT, FALLBACKS, GuardedFactor, backward_error, factorize
 
 
 def _coupled_fills(config):
@@ -56,7 +56,7 @@ def test_a_matrix_that_needs_pivoting_falls_back_and_says_so(caplog):
     assert f.pivoting == "diagonal"
     # what the unguarded diagonal-pivot solve would give: far above the limit
     assert backward_error(A, f._lu.solve(b), b) > 1e3 * BACKWARD_ERROR_LIMIT
-    with caplog.at_level(logging.WARNING, logger="cmpsim.sparse"):
+    with caplog.at_level(logging.WARNING, logger="cmpsim.numerics.sparse"):
         x = f.solve(b)
     assert f.pivoting == "partial" and "backward error" in f.fallback_reason
     assert FALLBACKS["partial_pivoting"] == before + 1

@@ -24,10 +24,10 @@ import pytest
 import scipy.sparse as sp
 
 import cmpsim
-from cmpsim.config import Config
-from cmpsim.equilibrium import solve_equilibrium
-from cmpsim.fvassembly import _operator_entries
-from cmpsim.reynolds import (
+from cmpsim.inputs.config import Config
+from cmpsim.solver.equilibrium import solve_equilibrium
+from cmpsim.numerics.fvassembly import _operator_entries
+from cmpsim.operators.reynolds import (
     LinearSolveStats,
     ReynoldsSystem,
     assemble_operator,
@@ -35,7 +35,7 @@ from cmpsim.reynolds import (
     factorize,
     refine,
 )
-from cmpsim.setup import build_problem
+from cmpsim.solver.setup import build_problem
 
 
 def _problem(**settings):
@@ -89,7 +89,7 @@ def test_factorizations_counts_the_calls_of_the_injected_solver():
 
     cfg = Config.paper()
     base = build_problem(cfg)
-    from cmpsim.equilibrium import WaferProblem
+    from cmpsim.solver.equilibrium import WaferProblem
 
     pr = WaferProblem(base.grid, solver=solver, **base._init_args)
     sol = solve_equilibrium(pr)
@@ -126,7 +126,7 @@ def test_assembly_map_sums_the_entries_it_was_built_from():
     coeffs = pr.face_coefficients(pr.contact_only_start())
     rows, cols, src, w = _operator_entries(pr.grid)
     amap = assembly_map(pr.grid)
-    from cmpsim.fvassembly import _stacked_components
+    from cmpsim.numerics.fvassembly import _stacked_components
 
     c = _stacked_components(amap, coeffs)
     N = pr.grid.size
@@ -171,7 +171,7 @@ def test_the_coarse_first_step_lands_on_the_equilibrium_of_the_target_grid(setti
 def test_the_chord_step_keeps_the_last_jacobian_only_near_convergence(monkeypatch):
     # at 96x256 the residual after the first step is ~1e-7 (within CHORD_MERIT x tol): one
     # Jacobian for two steps; the converged residual is still below the tolerance
-    from cmpsim import equilibrium
+    from cmpsim.solver import equilibrium
 
     pr = _problem(grid="96x256")
     calls = []
@@ -189,7 +189,7 @@ def test_the_chord_step_keeps_the_last_jacobian_only_near_convergence(monkeypatc
 
 
 def test_a_coarse_first_step_that_leads_nowhere_falls_back_to_the_plain_cold_start(monkeypatch):
-    from cmpsim import equilibrium
+    from cmpsim.solver import equilibrium
 
     pr = _problem()
     # a start tilted so far that the wafer edge would cut through the pad: no load balance there
@@ -206,7 +206,7 @@ def test_a_warm_chain_on_the_compliant_pad_starts_from_the_last_equilibrium():
     than the same points solved alone (the joint Newton takes 2 LU a point either way), the
     same positions (to the Newton tolerance)."""
     import cmpsim
-    from cmpsim.config import Config
+    from cmpsim.inputs.config import Config
 
     base = Config.default().replace(grid="coarse")
     psi = (3.0, 3.3, 3.6, 3.9)
@@ -242,7 +242,7 @@ def _agree(a, b, rtol):
 
 def test_the_joint_newton_solves_the_cold_default_in_two_factorisations_on_the_nested_solution(monkeypatch):
     """Issue 23 (3-inch criterion): film, pad deflection and wafer position solved by one Newton
-    iteration on all three (``cmpsim.compliance.joint_equilibrium``) take 2 LU where the nested
+    iteration on all three (``cmpsim.operators.compliance.joint_equilibrium``) take 2 LU where the nested
     solve (a coupled state at every trial position, a factorisation for each Jacobian) takes 5,
     and land on the nested solve's equilibrium to its tolerances."""
     from cmpsim.models.pads import WinklerPad
@@ -273,7 +273,7 @@ def test_a_joint_newton_that_crawls_hands_over_after_a_bounded_number_of_factori
     """Near hydroplaning on a stiff stack (subpad 50 MPa, 20x the default's) the joint steps,
     without the nested solve's load bracketing and line search, crawl: after
     ``_MAX_FACTORISATIONS`` LU the nested solve takes over and gives its own answers."""
-    from cmpsim.jointnewton import _MAX_FACTORISATIONS
+    from cmpsim.operators.jointnewton import _MAX_FACTORISATIONS
     from cmpsim.models.pads import WinklerPad
 
     cfg = Config.default().replace(grid="24x64", subpad_modulus="50 MPa")

@@ -20,9 +20,9 @@ from click.testing import CliRunner
 
 import cmpsim
 from cmpsim.cli import main
-from cmpsim.config import PARAMETERS, Config, parse_value
-from cmpsim import outputs
-from cmpsim.result import SCALARS
+from cmpsim.inputs.config import PARAMETERS, Config, parse_value
+from cmpsim.results import outputs
+from cmpsim.results.result import SCALARS
 from cmpsim.sweeps import SweepError, SweepSpec, sweep
 
 CLI = [sys.executable, "-m", "cmpsim.cli"]

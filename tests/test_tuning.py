@@ -9,8 +9,8 @@ from click.testing import CliRunner
 
 import cmpsim
 from cmpsim.cli import main
-from cmpsim.config import Config, zone_mean_pressure
-from cmpsim.tuning import read_incoming
+from cmpsim.inputs.config import Config, zone_mean_pressure
+from cmpsim.head.tuning import read_incoming
 
 PSI = 6894.757293168361
 HEAD = dict(carrier="membrane", zone_radii="10,20,30,38.1 mm")  # the default (edge-graded) grid

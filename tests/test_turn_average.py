@@ -1,6 +1,6 @@
 """The removal profile is the removal averaged over the wafer's turn (issue 25, "kinematics of a real tool").
 
-The equilibrium is solved in the frame of the carrier (:mod:`cmpsim.kinematics`): origin at the
+The equilibrium is solved in the frame of the carrier (:mod:`cmpsim.physics.kinematics`): origin at the
 wafer centre, axes fixed, platen turning at Omega_p = ``rotation_speed`` about (0, e), head and
 wafer at Omega_w = ``wafer_speed_ratio`` x Omega_p about the origin. The maps are stationary in
 that frame, so a material point of the wafer at radius r, carried by the wafer's rotation,
@@ -19,9 +19,9 @@ from scipy.integrate import solve_ivp
 from scipy.special import ellipe
 
 import cmpsim
-from cmpsim.kinematics import Kinematics
-from cmpsim.model import physical_setup
-from cmpsim.uniformity import ring_mean
+from cmpsim.physics.kinematics import Kinematics
+from cmpsim.solver.model import physical_setup
+from cmpsim.results.uniformity import ring_mean
 
 PLATEN_HEAD = {"rotation_speed": "90 rpm", "wafer_speed_ratio": 100.0 / 90.0}
 
@@ -81,7 +81,7 @@ def test_turn_averaged_sliding_speed_is_the_mean_distance_to_a_circle():
 def test_head_sweep_quadrature_is_the_time_average_of_the_oscillation():
     from scipy.integrate import quad
 
-    from cmpsim.kinematics import head_sweep_nodes
+    from cmpsim.physics.kinematics import head_sweep_nodes
 
     e0, amp = 0.1, 0.03
     for n in (1, 2, 4):
@@ -102,7 +102,7 @@ def test_head_sweep_quadrature_is_the_time_average_of_the_oscillation():
 
 
 def test_head_sweep_average_of_the_default_model():
-    from cmpsim.head_sweep import sweep_average
+    from cmpsim.head.head_sweep import sweep_average
 
     config = cmpsim.Config.default().replace(grid="12x32")
     still = cmpsim.solve(config, relative=False)

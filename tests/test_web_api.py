@@ -26,7 +26,7 @@ from fastapi.testclient import TestClient  # noqa: E402
 
 import cmpsim  # noqa: E402
 from cmpsim.cli import main  # noqa: E402
-from cmpsim.config import PARAMETERS, Config  # noqa: E402
+from cmpsim.inputs.config import PARAMETERS, Config  # noqa: E402
 from cmpsim.web.app import create_app  # noqa: E402
 from cmpsim.web.limits import Limits  # noqa: E402
 
@@ -73,7 +73,7 @@ def test_params_lists_every_input_with_its_unit_range_source_and_choices(client)
 
 
 def test_outputs_lists_every_scalar_of_a_solve_with_its_display_unit(client):
-    from cmpsim import outputs
+    from cmpsim.results import outputs
 
     r = client.get("/api/outputs")
     assert r.status_code == 200
@@ -185,12 +185,12 @@ def test_no_equilibrium_is_422_with_the_diagnosis_the_cli_prints(client):
 
 
 def test_an_internal_error_is_a_clean_500_without_traceback(monkeypatch):
-    import cmpsim.model
+    import cmpsim.solver.model
 
     def broken(*args, **kwargs):
         raise RuntimeError("internal detail that must not reach the client")
 
-    monkeypatch.setattr(cmpsim.model, "solve", broken)
+    monkeypatch.setattr(cmpsim.solver.model, "solve", broken)
     with TestClient(create_app(LIMITS, workers=1), raise_server_exceptions=False) as c:
         r = c.post("/api/solve", json={"grid": "coarse"})
     assert r.status_code == 500 and r.headers["content-type"] == "application/json"

@@ -18,7 +18,7 @@ from urllib.parse import urlsplit
 import pytest
 
 import cmpsim
-from cmpsim.config import Config
+from cmpsim.inputs.config import Config
 
 pytestmark = [pytest.mark.slow, pytest.mark.filterwarnings("ignore::DeprecationWarning")]
 

@@ -1,4 +1,4 @@
-"""The zone response of a membrane head: shares, gains and response widths (cmpsim.zone_response; issue 25)."""
+"""The zone response of a membrane head: shares, gains and response widths (cmpsim.head.zone_response; issue 25)."""
 
 import math
 
@@ -6,12 +6,12 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.config import Config
-from cmpsim.grid import PolarGrid
-from cmpsim.plate import KirchhoffPlate, PlateOperator, zone_load
+from cmpsim.inputs.config import Config
+from cmpsim.numerics.grid import PolarGrid
+from cmpsim.numerics.plate import KirchhoffPlate, PlateOperator, zone_load
 from cmpsim.testing.plates import hetenyi_step_width, winkler_step_load
-from cmpsim.uniformity import ring_mean
-from cmpsim.zone_response import ZoneSolver, boundary_widths, contrast_gains, inside_share, local_gains, zone_response
+from cmpsim.results.uniformity import ring_mean
+from cmpsim.head.zone_response import ZoneSolver, boundary_widths, contrast_gains, inside_share, local_gains, zone_response
 
 RADII = (0.05, 0.10, 0.13, 0.145, 0.15)  # the five zones of the 300mm preset, m
 FACES = np.linspace(0.0, 0.15, 3001)  # 0.05 mm rings
@@ -139,7 +139,7 @@ def test_the_step_load_closed_form_carries_its_load_and_tends_to_hetenyis_beam_f
 
 
 def test_the_plate_under_a_zone_step_on_a_winkler_bed_converges_to_the_closed_form_at_second_order():
-    """The reference against cmpsim.plate (an independent discretisation): a boundary inside a cell."""
+    """The reference against cmpsim.numerics.plate (an independent discretisation): a boundary inside a cell."""
     k, a, b = 1.6e9, 0.15, 0.0731
     errors = []
     for n_r in (15, 30, 60, 120):

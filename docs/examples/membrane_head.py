@@ -27,7 +27,7 @@ What it shows (the script asserts each statement):
   carries a zone's extra load. Without `keep="pressure"` the tuner may change the load: here the
   mean pressure rises by under 2 %, and the mean rate with it.
 - **The response width at each boundary** (`tuned.response_widths`, or
-  `cmpsim.zone_response.zone_response(config)` at given pressures): over how many millimetres the
+  `cmpsim.head.zone_response.zone_response(config)` at given pressures): over how many millimetres the
   rate's answer to a pressure step at a zone boundary falls from 90 % to 10 %.
 - **The production case** is a preset: `cmpsim tune-zones --preset 300mm --json` (a 300 mm wafer,
   five zones, a retaining ring on the layered pad; about 40 s of CPU per tuning, so not run here;
@@ -65,7 +65,7 @@ for name, r in (("rigid carrier", rigid), ("membrane, uniform zones", membrane))
 print(f"{'tuned zones':26s} non-uniformity {100 * tuned.within_wafer_nonuniformity:.3f} %, pressures "
       + ", ".join(f"{p / 6894.757:.2f}" for p in tuned.zone_pressures) + " psi")
 print("share of each zone's response under the zone:", ", ".join(f"{v:.2f}" for v in tuned.response_inside))
-# the 10-90 % width of the rate's answer to a pressure step at each inner zone boundary (cmpsim.zone_response)
+# the 10-90 % width of the rate's answer to a pressure step at each inner zone boundary (cmpsim.head.zone_response)
 widths = tuned.response_widths
 print("response width at each boundary:", ", ".join(
     f"{1e3 * w.boundary:g} mm: " + ("no fall" if w.width is None else f"{1e3 * w.width:.1f} mm") for w in widths))

@@ -33,7 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import cmpsim
-from cmpsim.equilibrium import EquilibriumError
+from cmpsim.solver.equilibrium import EquilibriumError
 
 GRID = os.environ.get("CMPSIM_DOCS_GRID", "default")
 OUT = Path(os.environ.get("CMPSIM_DOCS_OUT", Path(__file__).parent / "_output" / Path(__file__).stem))

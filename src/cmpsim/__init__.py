@@ -23,23 +23,23 @@ from ._version import __version__
 __all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "tune_zones", "EquilibriumError", "__version__"]
 
 _LAZY = {
-    "Config": ("cmpsim.config", "Config"),
-    "Result": ("cmpsim.result", "Result"),
-    "solve": ("cmpsim.model", "solve"),
-    "EquilibriumError": ("cmpsim.equilibrium", "EquilibriumError"),
+    "Config": ("cmpsim.inputs.config", "Config"),
+    "Result": ("cmpsim.results.result", "Result"),
+    "solve": ("cmpsim.solver.model", "solve"),
+    "EquilibriumError": ("cmpsim.solver.equilibrium", "EquilibriumError"),
     "sweep": ("cmpsim.sweeps", "sweep"),
     "reproduce": ("cmpsim.reproduction", "reproduce"),
     "validate": ("cmpsim.validation", "validate"),
     "calibrate": ("cmpsim.calibration", "calibrate"),
-    "tune_zones": ("cmpsim.tuning", "tune_zones"),
+    "tune_zones": ("cmpsim.head.tuning", "tune_zones"),
     "die": ("cmpsim.die", None),  # the chip-scale model, a package: cmpsim.die.simulate(...)
 }
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .config import Config
-    from .equilibrium import EquilibriumError
-    from .model import solve
-    from .result import Result
+    from .inputs.config import Config
+    from .solver.equilibrium import EquilibriumError
+    from .solver.model import solve
+    from .results.result import Result
 
 
 def __getattr__(name: str) -> Any:

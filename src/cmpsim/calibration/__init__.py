@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from ..config import Config
+from ..inputs.config import Config
 from ..validation import _as_datasets
 from .request import CALIBRATABLE, CalibrationError, _positive, check_data, default_bounds, fit_bounds, free_names, inside, start_config
 from .residuals import FAILED_POINT_PENALTY, _point_rows, _Problem

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from ..config import PARAMETERS, Config, parse_value
+from ..inputs.config import PARAMETERS, Config, parse_value
 from ..validation import Dataset
 
 __all__ = ["CALIBRATABLE", "CalibrationError", "default_bounds"]

@@ -7,7 +7,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ..config import Config
+from ..inputs.config import Config
 from ..validation import Dataset, PointResult, evaluate_dataset, solve_points
 
 __all__ = ["FAILED_POINT_PENALTY"]

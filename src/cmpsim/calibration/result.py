@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import PARAMETERS, Config, format_display
+from ..inputs.config import PARAMETERS, Config, format_display
 from ..tables import text_table
 from ..validation import PointResult
 

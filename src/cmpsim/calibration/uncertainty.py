@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..config import PARAMETERS, format_display
+from ..inputs.config import PARAMETERS, format_display
 
 __all__ = ["Uncertainty", "central_jacobian", "uncertainty"]
 

@@ -31,8 +31,8 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     """
     from ..die import BUILTIN_LAYOUTS, simulate, simulate_wafer
     from ..die.report import to_json, write_die_outputs
-    from ..equilibrium import EquilibriumError
-    from ..units import to_si
+    from ..solver.equilibrium import EquilibriumError
+    from ..inputs.units import to_si
 
     if list_dies:
         for name, (text, _) in BUILTIN_LAYOUTS.items():

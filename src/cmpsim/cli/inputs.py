@@ -7,7 +7,7 @@ import click
 
 from .group import main
 
-#: The names of cmpsim.config.PRESETS (written out so that the command line starts without importing the config; a test keeps them equal).
+#: The names of cmpsim.inputs.config.PRESETS (written out so that the command line starts without importing the config; a test keeps them equal).
 PRESET_NAMES = ("default", "paper", "300mm")
 
 
@@ -27,7 +27,7 @@ def parse_assignments(items) -> dict[str, str]:
 
 def load_config(config_path, assignments, preset: str | None = None, grid: str | None = None):
     """Config from a preset, an optional TOML file, --set overrides and the grid, in that order (raises ValueError)."""
-    from ..config import Config
+    from ..inputs.config import Config
 
     base = Config.preset(preset) if preset else Config.default()
     cfg = Config.from_toml(config_path, base=base) if config_path else base
@@ -53,7 +53,7 @@ def config_options(command):
 @click.option("--markdown", is_flag=True, help="Print the parameter table of docs/model.md.")
 def params(markdown):
     """List every input: name, default, unit, valid range and source."""
-    from ..config import PARAMETERS, format_display, parameter_table_markdown
+    from ..inputs.config import PARAMETERS, format_display, parameter_table_markdown
 
     if markdown:
         click.echo(parameter_table_markdown(), nl=False)

@@ -29,8 +29,8 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
     `[slurry]` `[pad]` `[numerics]` or flat keys; values with units such as "4 psi" or SI
     numbers). See `cmpsim params`.
     """
-    from ..equilibrium import EquilibriumError
-    from ..model import solve
+    from ..solver.equilibrium import EquilibriumError
+    from ..solver.model import solve
 
     if config and config_path:
         _fail(f"give the configuration once: CONFIG ({config}) or --config ({config_path})")

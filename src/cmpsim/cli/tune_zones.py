@@ -25,9 +25,9 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
     """
     import json
 
-    from ..equilibrium import EquilibriumError
-    from ..tuning import tune_zones
-    from ..units import parse_list
+    from ..solver.equilibrium import EquilibriumError
+    from ..head.tuning import tune_zones
+    from ..inputs.units import parse_list
 
     try:
         cfg = load_config(config_path, assignments, preset, grid)

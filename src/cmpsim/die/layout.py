@@ -150,7 +150,7 @@ def _grid(rows: list[str], what: str, path) -> np.ndarray:
 
 def read_layout(path) -> Layout:
     """Read a layout CSV (format in the module docstring); ValueError naming what is wrong."""
-    from ..units import to_si
+    from ..inputs.units import to_si
 
     path = Path(path)
     if not path.is_file():

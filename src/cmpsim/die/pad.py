@@ -2,7 +2,7 @@
 
 The pad averages a pattern over the length over which its surface couples laterally. For the
 stack of cmpsim's layered pad model (a top pad bending as a thin plate over a soft subpad,
-:class:`cmpsim.padstack.LayeredFoundation`) the deflection per pressure at wave number q is
+:class:`cmpsim.physics.padstack.LayeredFoundation`) the deflection per pressure at wave number q is
 
     C(q) = t1/M1 + 1 / (D1 q^4 + K2(q)),   D1 = E1 t1^3 / 12 (1 - nu1^2),
 
@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from ..padstack import LayeredFoundation, PadLayer, plate_bending_stiffness
+from ..physics.padstack import LayeredFoundation, PadLayer, plate_bending_stiffness
 
 __all__ = ["pad_stack", "bending_length", "half_power_wave_number", "planarization_length_from_pad", "GAUSSIAN_HALF_POWER"]
 

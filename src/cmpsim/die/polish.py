@@ -43,7 +43,7 @@ def _finite(v):
 
 
 def _config(config):
-    from ..config import Config
+    from ..inputs.config import Config
 
     return config if config is not None else Config.default()
 
@@ -292,7 +292,7 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
     """
     config, layout, process, w, derived, eff = _prepare(layout, config, process, planarization_length, weighting, cell_size, **process_values)
     if blanket_rate is None:
-        from ..model import solve
+        from ..solver.model import solve
 
         blanket_rate = float(solve(config, relative=False).removal_rate_mean)
     if time is not None and not (math.isfinite(time) and time >= 0):
@@ -417,7 +417,7 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     config, layout, process, w, derived, eff = _prepare(layout, config if result is None else result.config, process,
                                                         planarization_length, weighting, cell_size, **process_values)
     if result is None:
-        from ..model import solve
+        from ..solver.model import solve
 
         result = solve(config, relative=False)
     x, y = die_sites(layout.size, config.wafer_diameter, config.edge_exclusion)

@@ -65,7 +65,7 @@ class DieProcess:
     @classmethod
     def from_values(cls, kind: str = "oxide", **values) -> "DieProcess":
         """A process from values with units (``"0.8 um"``) or SI numbers; unknown names are refused."""
-        from ..units import to_si
+        from ..inputs.units import to_si
 
         out = {}
         for name, value in values.items():

@@ -13,7 +13,7 @@ input                     values -> class                                  proto
 ``carrier``               :data:`CARRIERS` (rigid, membrane)               :class:`~cmpsim.models.base.CarrierModel`
 ========================  ==============================================  =====================================
 
-:mod:`cmpsim.setup` builds the models of a Config with the functions below; the solver and
+:mod:`cmpsim.solver.setup` builds the models of a Config with the functions below; the solver and
 the post-processing only ask the objects. New physics adds a class and an entry here.
 """
 
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..cavitation import VACUUM_GAUGE_PRESSURE
+from ..operators.cavitation import VACUUM_GAUGE_PRESSURE
 from .base import CarrierModel, CavitationModel, PadModel, RemovalLaw, SlurryModel
 from .carriers import MembraneCarrier, RigidCarrier
 from .pads import LayerPad, RigidPad, WinklerPad
@@ -71,7 +71,7 @@ def pad_model(config) -> PadModel:
 
 
 def pad_for_foundation(foundation) -> PadModel:
-    """The pad model that solves with an elastic stack of :mod:`cmpsim.padstack` (None: rigid)."""
+    """The pad model that solves with an elastic stack of :mod:`cmpsim.physics.padstack` (None: rigid)."""
     for cls in PAD_MODELS.values():
         if type(foundation) is cls.foundation_type:
             return cls(foundation)

@@ -2,9 +2,9 @@
 
 Each axis is a small family of classes behind one protocol, picked by name in one place (the
 registry of :mod:`cmpsim.models`, as ``scipy.integrate.solve_ivp(method=...)`` maps a name to
-an ``OdeSolver`` subclass). The Newton driver (:mod:`cmpsim.equilibrium`), the wafer problem
-(:mod:`cmpsim.wafer`), the coupled pad solve (:mod:`cmpsim.compliance`) and the
-post-processing (:mod:`cmpsim.postprocess`) only call these methods; none of them tests an
+an ``OdeSolver`` subclass). The Newton driver (:mod:`cmpsim.solver.equilibrium`), the wafer problem
+(:mod:`cmpsim.solver.wafer`), the coupled pad solve (:mod:`cmpsim.operators.compliance`) and the
+post-processing (:mod:`cmpsim.solver.postprocess`) only call these methods; none of them tests an
 option's name (``tests/test_house.py`` checks that).
 """
 
@@ -23,13 +23,13 @@ class PadModel(Protocol):
     linearisation and the cold start. Implementations: :mod:`cmpsim.models.pads`."""
 
     name: str
-    #: The elastic stack (:mod:`cmpsim.padstack`), or None for a pad that does not deflect.
+    #: The elastic stack (:mod:`cmpsim.physics.padstack`), or None for a pad that does not deflect.
     foundation: object
     #: Newton may reuse its Jacobian near convergence (chord steps).
     chord_steps: bool
     #: Newton shrinks its trust radius after a cut step and regrows it after a full one.
     adaptive_trust: bool
-    #: The coarse-grid warm start and first step of :mod:`cmpsim.equilibrium` apply.
+    #: The coarse-grid warm start and first step of :mod:`cmpsim.solver.equilibrium` apply.
     coarse_starts: bool
 
     def check(self, variant: str, slurry: "SlurryModel") -> None:
@@ -39,10 +39,10 @@ class PadModel(Protocol):
         """Film thickness at points (x, y) for the wafer's unknowns u, m (with the pad's deflection)."""
 
     def face_coefficients(self, problem, u):
-        """The Reynolds :class:`~cmpsim.reynolds.FaceCoefficients` at u."""
+        """The Reynolds :class:`~cmpsim.operators.reynolds.FaceCoefficients` at u."""
 
     def state(self, problem, u, guess=None):
-        """The :class:`~cmpsim.state.PressureState` at u (raises ValueError if the film closes or the pressure diverges)."""
+        """The :class:`~cmpsim.operators.state.PressureState` at u (raises ValueError if the film closes or the pressure diverges)."""
 
     def jacobian(self, problem, st, rel_step: float = 1e-6) -> np.ndarray:
         """d(residual)/du at a solved state."""
@@ -184,5 +184,5 @@ class CarrierModel(Protocol):
         """The wafer's bending at the cell centres (m), zero for a rigid wafer."""
 
     def equilibrium(self, problem, solve, start=None, **options):
-        """The :class:`~cmpsim.state.EquilibriumSolution` of ``problem``, with ``solve`` (Newton on the
-        rigid-body unknowns, :func:`cmpsim.equilibrium.solve_equilibrium`) doing the rigid-body part."""
+        """The :class:`~cmpsim.operators.state.EquilibriumSolution` of ``problem``, with ``solve`` (Newton on the
+        rigid-body unknowns, :func:`cmpsim.solver.equilibrium.solve_equilibrium`) doing the rigid-body part."""

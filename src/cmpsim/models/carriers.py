@@ -4,8 +4,8 @@ The paper's carrier holds the wafer as a rigid body (:class:`RigidCarrier`): thr
 the film thickness h0 at the centre and the two tilts, driven by the balance of the applied
 load and of the moments about the carrier's pivot at the centre of the wafer face
 (eq. 30-31). A membrane head (:class:`MembraneCarrier`) presses the wafer through concentric
-pressure zones and lets it bend as a free Kirchhoff plate (:mod:`cmpsim.plate`,
-:mod:`cmpsim.membrane`): the same three rigid-body unknowns and balances, plus the bending,
+pressure zones and lets it bend as a free Kirchhoff plate (:mod:`cmpsim.numerics.plate`,
+:mod:`cmpsim.operators.membrane`): the same three rigid-body unknowns and balances, plus the bending,
 found around the rigid-body Newton solve. The carrier also says how its equilibrium is solved
 (:meth:`RigidCarrier.equilibrium`), so the operating point never asks which carrier it has.
 """
@@ -17,10 +17,10 @@ from functools import lru_cache
 import numpy as np
 from scipy.interpolate import CubicSpline
 
-from ..geometry import film_thickness
-from ..membrane import BendingError, solve_bending
-from ..plate import KirchhoffPlate, zone_load
-from ..state import EquilibriumError
+from ..physics.geometry import film_thickness
+from ..operators.membrane import BendingError, solve_bending
+from ..numerics.plate import KirchhoffPlate, zone_load
+from ..operators.state import EquilibriumError
 
 __all__ = ["RigidCarrier", "MembraneCarrier", "ring_of", "ring_table"]
 
@@ -47,7 +47,7 @@ def ring_table(foundation, radius: float, ring: tuple) -> CubicSpline:
     """The pad's deflection under the retaining ring (m) as a function of the radius under the wafer (m).
 
     ``ring`` = (inner radius, outer radius, pressure) in m, m, Pa; ``foundation`` a laterally
-    coupled pad (:meth:`cmpsim.padstack.LayeredFoundation.annulus_deflection`). The Hankel
+    coupled pad (:meth:`cmpsim.physics.padstack.LayeredFoundation.annulus_deflection`). The Hankel
     integral is evaluated at :data:`RING_TABLE` radii r_j = R (1 - s_j^2), s_j equally spaced
     (spacing 2R/n at the centre, R/n^2 at the edge, where the deflection turns over the pad's
     coupling length), and interpolated by a cubic spline. On the 300mm preset's pad and ring the
@@ -90,14 +90,14 @@ class RigidCarrier:
 
         The ring presses ``retaining_ring_pressure`` on the annulus from wafer radius + gap to
         + gap + width; the laterally coupled pad carries it to the wafer's edge
-        (:meth:`cmpsim.padstack.LayeredFoundation.annulus_deflection`), tabulated once per pad,
+        (:meth:`cmpsim.physics.padstack.LayeredFoundation.annulus_deflection`), tabulated once per pad,
         wafer and ring (:func:`ring_table`) and interpolated by a cubic spline.
         """
         return ring_table(problem.foundation, problem.grid.radius, self.ring)(r)
 
     def equilibrium(self, problem, solve, start=None, **options):
         """The equilibrium of ``problem``: ``solve(problem, start=start, **options)``, Newton on the
-        rigid-body unknowns (:func:`cmpsim.equilibrium.solve_equilibrium`)."""
+        rigid-body unknowns (:func:`cmpsim.solver.equilibrium.solve_equilibrium`)."""
         return solve(problem, start=start, **options)
 
     def bending_field(self, problem) -> np.ndarray:
@@ -138,14 +138,14 @@ class MembraneCarrier(RigidCarrier):
 
     Zone k presses ``pressures[k]`` (Pa) behind the wafer out to ``radii[k]`` (m); the wafer
     (``plate``: thickness, Young's modulus, Poisson ratio) bends by w under the zone pressures
-    behind and the slurry and pad pressures in front (:mod:`cmpsim.membrane`). The rigid-body
+    behind and the slurry and pad pressures in front (:mod:`cmpsim.operators.membrane`). The rigid-body
     unknowns, the load (the zones' total, ``applied_pressure`` being their area mean) and the
     balances are the rigid carrier's; the film adds the bending:
 
         h(x, y) = h_rigid(u; x, y) + w(x, y)       (eq. 30 plus the plate's deflection).
 
     The bending lives on the grid of the first equilibrium solved and is interpolated
-    (:meth:`cmpsim.grid.PolarGrid.interpolate`, second order) to every point the solver asks,
+    (:meth:`cmpsim.numerics.grid.PolarGrid.interpolate`, second order) to every point the solver asks,
     on that grid or a coarser one.
     """
 
@@ -207,12 +207,12 @@ class MembraneCarrier(RigidCarrier):
         return self._bend(problem.xc, problem.yc)
 
     def back_pressure(self, grid) -> np.ndarray:
-        """The zone pressures behind the wafer as a cell field on ``grid``, Pa (:func:`cmpsim.plate.zone_load`)."""
+        """The zone pressures behind the wafer as a cell field on ``grid``, Pa (:func:`cmpsim.numerics.plate.zone_load`)."""
         return zone_load(grid, self.radii, self.pressures)
 
     def equilibrium(self, problem, solve, start=None, **options):
         """Rigid-body equilibrium of the flat-backed wafer (or of :attr:`initial_bending`, a warm start),
-        then the bending found around it (:func:`cmpsim.membrane.solve_bending`): each Newton step of
+        then the bending found around it (:func:`cmpsim.operators.membrane.solve_bending`): each Newton step of
         the bending is one ``solve``, warm-started at the rigid-body position the linearised balance
         predicts, and its Krylov vectors are linearised pressure responses of the pad model
         (``film_response``, ``sensitivity``: one back-substitution each).

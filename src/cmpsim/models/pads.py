@@ -3,10 +3,10 @@
 - :class:`RigidPad` (the paper): only the asperity layer deforms; the film is the wafer's
   (:mod:`cmpsim.models.carriers`), one sparse Reynolds solve per position, the Jacobian from
   one extra coefficient evaluation (dc/dh times the geometric dh/du).
-- :class:`WinklerPad`: the pad stack as a local elastic bed (:class:`cmpsim.padstack.WinklerFoundation`);
-- :class:`LayerPad`: elastic layers with lateral coupling (:class:`cmpsim.padstack.LayeredFoundation`).
+- :class:`WinklerPad`: the pad stack as a local elastic bed (:class:`cmpsim.physics.padstack.WinklerFoundation`);
+- :class:`LayerPad`: elastic layers with lateral coupling (:class:`cmpsim.physics.padstack.LayeredFoundation`).
 
-The two compliant pads solve the film and the deflection together (:mod:`cmpsim.compliance`).
+The two compliant pads solve the film and the deflection together (:mod:`cmpsim.operators.compliance`).
 Every model answers the same questions of :class:`cmpsim.models.base.PadModel`; the
 equilibrium solver asks them and never tests which pad it has. A new pad model subclasses
 one of these (or implements the protocol) and adds an entry to :data:`cmpsim.models.PAD_MODELS`
@@ -18,10 +18,10 @@ from __future__ import annotations
 import numpy as np
 from scipy.optimize import brentq
 
-from .. import compliance, compliantfilm, jointnewton, sensitivity
-from ..padstack import LayeredFoundation, PadLayer, WinklerFoundation
-from ..reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients
-from ..state import EquilibriumError, PressureState
+from ..operators import compliance, compliantfilm, jointnewton, sensitivity
+from ..physics.padstack import LayeredFoundation, PadLayer, WinklerFoundation
+from ..operators.reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients
+from ..operators.state import EquilibriumError, PressureState
 
 __all__ = ["RigidPad", "WinklerPad", "LayerPad", "pad_layers"]
 
@@ -34,7 +34,7 @@ JACOBIAN_RTOL = 1e-10
 
 
 def pad_layers(config) -> list:
-    """The :class:`~cmpsim.padstack.PadLayer` stack of a Config: top pad, then the subpad if any."""
+    """The :class:`~cmpsim.physics.padstack.PadLayer` stack of a Config: top pad, then the subpad if any."""
     layers = [PadLayer(config.pad_thickness, config.pad_bulk_modulus, config.pad_poisson)]
     if config.subpad_thickness > 0:
         layers.append(PadLayer(config.subpad_thickness, config.subpad_modulus, config.subpad_poisson))
@@ -203,10 +203,10 @@ class RigidPad:
 
     # ------------------------------------------------------------------ chains of points
     def resume_chain(self, problem) -> None:
-        """Nothing to carry: the rigid solve refines against the chain's last LU (:mod:`cmpsim.equilibrium`)."""
+        """Nothing to carry: the rigid solve refines against the chain's last LU (:mod:`cmpsim.solver.equilibrium`)."""
 
     def end_chain(self, problem) -> None:
-        """Nothing to keep beyond the chain's last LU (kept by :mod:`cmpsim.equilibrium`)."""
+        """Nothing to keep beyond the chain's last LU (kept by :mod:`cmpsim.solver.equilibrium`)."""
 
 
 def _contact_root(problem, shape, h_lo: float, h_hi: float, max_iter: int = 30):
@@ -257,8 +257,8 @@ def _contact_root(problem, shape, h_lo: float, h_hi: float, max_iter: int = 30):
 class WinklerPad(RigidPad):
     """The pad stack as a local elastic (Winkler) bed under the asperities: w = p / k.
 
-    Film and deflection are solved together at every position (:func:`cmpsim.compliance.coupled_state`);
-    the Jacobian is the implicit derivative of that solve (:func:`cmpsim.compliance.coupled_jacobian`).
+    Film and deflection are solved together at every position (:func:`cmpsim.operators.compliance.coupled_state`);
+    the Jacobian is the implicit derivative of that solve (:func:`cmpsim.operators.compliance.coupled_jacobian`).
     Newton takes a fresh Jacobian at every step and keeps its trust radius: shrinking it stalled
     the outer Newton on the default model under Thakurta's conditions (tests/test_validation.py).
     """
@@ -305,18 +305,18 @@ class WinklerPad(RigidPad):
         return compliance.coupled_jacobian(problem, st, rel_step)
 
     def sensitivity(self, problem, st: PressureState, rel_step: float = 1e-6):
-        """(d(residual)/du, d(total pressure)/du) at a solved state (:func:`cmpsim.sensitivity.coupled_sensitivity`)."""
+        """(d(residual)/du, d(total pressure)/du) at a solved state (:func:`cmpsim.operators.sensitivity.coupled_sensitivity`)."""
         return sensitivity.coupled_sensitivity(problem, st, rel_step)
 
     def film_response(self, problem, st: PressureState, dh, dhr, dha) -> np.ndarray:
         """The linear change of the total pressure (Pa, flat) at a solved state under a change of the carrier's
         film at fixed u: ``dh``, ``dhr``, ``dha`` (m, flat) at the cell centres, radial and angular faces
-        (:func:`cmpsim.sensitivity.film_response`)."""
+        (:func:`cmpsim.operators.sensitivity.film_response`)."""
         return sensitivity.film_response(problem, st, dh, dhr, dha)[0]
 
     def expect_film_change(self, problem, st: PressureState, dh, dhr, dha) -> np.ndarray:
         """:meth:`film_response`, and the next coupled solve starts from the film and deflection it predicts
-        (:func:`cmpsim.sensitivity.expect_film_change`)."""
+        (:func:`cmpsim.operators.sensitivity.expect_film_change`)."""
         return sensitivity.expect_film_change(problem, st, dh, dhr, dha)
 
     def contact_only_start(self, problem) -> np.ndarray:
@@ -324,7 +324,7 @@ class WinklerPad(RigidPad):
 
     def joint_newton(self, problem, u, tol: float, max_iter: int, max_step: float):
         """(u, state, steps, history) of Newton on (slurry pressure, deflection, position) together
-        (:func:`cmpsim.jointnewton.joint_equilibrium`), or None if it does not converge."""
+        (:func:`cmpsim.operators.jointnewton.joint_equilibrium`), or None if it does not converge."""
         if not self.joint:
             return None
         return jointnewton.joint_equilibrium(problem, u, tol=tol, max_iter=max_iter, max_step=max_step)

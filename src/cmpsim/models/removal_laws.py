@@ -4,7 +4,7 @@ Each law says which fields it needs (:attr:`needs`, names of :data:`REMOVAL_FIEL
 computes the rate (m/s) from them; its coefficients come from the Config
 (:meth:`from_config`). The post-processing offers the fields and never asks which law it has.
 A new law (e.g. an abrasive-particle law) adds a class here and an entry in the registry of
-:mod:`cmpsim.models`. Kernels and references: :mod:`cmpsim.removal`, ``docs/model.md``
+:mod:`cmpsim.models`. Kernels and references: :mod:`cmpsim.physics.removal`, ``docs/model.md``
 ("Removal rate").
 """
 
@@ -16,10 +16,10 @@ import warnings
 
 import numpy as np
 
-from ..abrasion import AbrasiveContact, abrasive_removal_rate
-from ..kinetics import chemical_rate, flash_temperature, series_rate
-from ..materials import ABRASIVES, FILMS
-from ..removal import removal_rate, shear_power_removal_rate
+from ..physics.abrasion import AbrasiveContact, abrasive_removal_rate
+from ..physics.kinetics import chemical_rate, flash_temperature, series_rate
+from ..physics.materials import ABRASIVES, FILMS
+from ..physics.removal import removal_rate, shear_power_removal_rate
 
 __all__ = ["REMOVAL_FIELDS", "PaperRemovalLaw", "ShearPowerRemovalLaw", "AbrasiveRemovalLaw", "TwoStepKinetics", "abrasive_contact"]
 
@@ -32,12 +32,12 @@ REMOVAL_FIELDS = {
     "relative_speed": "local sliding speed |u_pad - u_wafer|, m/s",
     "contact_area_ratio": "real over nominal contact area of the pad summits A_r/A_n (elastic + elastoplastic + plastic)",
     "film_thickness": "h, m",
-    "contact_spot_density": "summits in contact per unit nominal area N (cmpsim.contact.contact_spot_density), 1/m^2",
+    "contact_spot_density": "summits in contact per unit nominal area N (cmpsim.physics.contact.contact_spot_density), 1/m^2",
 }
 
 
 class PaperRemovalLaw:
-    """The paper's Runnels-Eyman law RR = K sigma_n |tau| (:func:`cmpsim.removal.removal_rate`)."""
+    """The paper's Runnels-Eyman law RR = K sigma_n |tau| (:func:`cmpsim.physics.removal.removal_rate`)."""
 
     name = "paper"
     needs = ("normal_stress", "shear_stress")
@@ -57,7 +57,7 @@ class PaperRemovalLaw:
 
 
 class ShearPowerRemovalLaw:
-    """The shear-power law RR = k_s (mu p_c + chi |tau_f|) |du| (:func:`cmpsim.removal.shear_power_removal_rate`)."""
+    """The shear-power law RR = k_s (mu p_c + chi |tau_f|) |du| (:func:`cmpsim.physics.removal.shear_power_removal_rate`)."""
 
     name = "shear_power"
     needs = ("contact_pressure", "fluid_shear_stress", "relative_speed")
@@ -81,7 +81,7 @@ class ShearPowerRemovalLaw:
 
 
 def abrasive_contact(config) -> AbrasiveContact:
-    """The particles, pad and film of the abrasive law (:mod:`cmpsim.abrasion`) of a Config.
+    """The particles, pad and film of the abrasive law (:mod:`cmpsim.physics.abrasion`) of a Config.
 
     The pad presses an embedded particle with p_pad = min(H_pad, 4 E'_pad / (3 pi)), E'_pad the
     pad-particle effective modulus; the particle-film contact takes E* from both bodies and the
@@ -115,7 +115,7 @@ def abrasive_contact(config) -> AbrasiveContact:
 
 
 class TwoStepKinetics:
-    """A thermally activated chemical step in series with the mechanical rate (:mod:`cmpsim.kinetics`).
+    """A thermally activated chemical step in series with the mechanical rate (:mod:`cmpsim.physics.kinetics`).
 
     RR = RR_c RR_m / (RR_c + RR_m), RR_c = c_0 exp(-(E_a/R_g)(1/T - 1/T_0)), T = T_0 + beta mu p_c |du|.
     """
@@ -139,7 +139,7 @@ class TwoStepKinetics:
 
 
 class AbrasiveRemovalLaw:
-    """Abrasive particles trapped in the pad's real contact plough the film (:func:`cmpsim.abrasion.abrasive_removal_rate`),
+    """Abrasive particles trapped in the pad's real contact plough the film (:func:`cmpsim.physics.abrasion.abrasive_removal_rate`),
     with the chemical step in series for ``removal_kinetics = 'two_step'`` (docs/model.md, section 13e)."""
 
     name = "abrasive"

@@ -1,14 +1,14 @@
 """Slurry models (``slurry_model``, with ``cavitation``): the pressure unknown, cavitation and shear.
 
 A slurry model owns what depends on the slurry's rheology beyond the Reynolds coefficients
-(:data:`cmpsim.reynolds.RHEOLOGIES`):
+(:data:`cmpsim.operators.reynolds.RHEOLOGIES`):
 
 - the unknown phi of the discrete system and the pressures it stands for: ln(p/p0) and the
   absolute granular pressure p0 e^phi (:class:`GranularSlurry`, the paper), or the gauge
   pressure p (:class:`NewtonianSlurry`);
 - the cavitation of the film (Newtonian only): :class:`NoCavitation` (full Sommerfeld),
   :class:`GumbelCavitation` (acting pressure max(p, p_cav)) or :class:`JFOCavitation`
-  (mass-conserving, the complementarity system of :mod:`cmpsim.cavitation`);
+  (mass-conserving, the complementarity system of :mod:`cmpsim.operators.cavitation`);
 - the shear stress of the slurry on the wafer (eq. 14-15; Patir & Cheng 1979) and the normal
   stress the removal law sees.
 
@@ -22,11 +22,11 @@ import numpy as np
 
 import scipy.sparse as sp
 
-from ..cavitation import CavitationSystem, upwind_couette_matrix
-from ..flowfactors import shear_stress_factors
-from ..grainflow import GrainFlow, grain_coefficients
-from ..removal import newtonian_shear_stress, slurry_shear_stress
-from ..reynolds import NEWTONIAN_GRAIN_COEFFICIENT, FaceCoefficients, assemble_operator, flux_divergence, own_face_fluxes
+from ..operators.cavitation import CavitationSystem, upwind_couette_matrix
+from ..physics.flowfactors import shear_stress_factors
+from ..physics.grainflow import GrainFlow, grain_coefficients
+from ..physics.removal import newtonian_shear_stress, slurry_shear_stress
+from ..operators.reynolds import NEWTONIAN_GRAIN_COEFFICIENT, FaceCoefficients, assemble_operator, flux_divergence, own_face_fluxes
 
 __all__ = ["NoCavitation", "GumbelCavitation", "JFOCavitation", "GranularSlurry", "NewtonianSlurry", "FILL_SCALE"]
 
@@ -47,9 +47,9 @@ class NoCavitation:
 
     name = "none"
     p_cav = None
-    #: The coarse-grid starts of :mod:`cmpsim.equilibrium` apply (linear system).
+    #: The coarse-grid starts of :mod:`cmpsim.solver.equilibrium` apply (linear system).
     coarse_starts = True
-    #: Can be solved coupled with a compliant pad's deflection (:mod:`cmpsim.compliance`).
+    #: Can be solved coupled with a compliant pad's deflection (:mod:`cmpsim.operators.compliance`).
     couples_with_deflection = True
 
     def system(self, problem, coeffs, frozen=None):
@@ -72,12 +72,12 @@ class NoCavitation:
         """Cells held at p_cav (None: no cavitation)."""
         return None
 
-    # ---- the coupled solve of a compliant pad (cmpsim.compliance): the unknown, its residual
+    # ---- the coupled solve of a compliant pad (cmpsim.operators.compliance): the unknown, its residual
     def residual(self, grid, coeffs, phi):
         """(R, dR/dphi) of the Reynolds system at the unknown phi: R = A phi + div q, m^3/s (flat).
 
         The system is linear in phi (Gumbel clips only the pressure that acts on the wafer),
-        so dR/dphi is the operator A of :func:`cmpsim.reynolds.assemble_operator`.
+        so dR/dphi is the operator A of :func:`cmpsim.operators.reynolds.assemble_operator`.
         """
         A = assemble_operator(grid, coeffs)
         return A @ np.asarray(phi).ravel() + flux_divergence(grid, coeffs), A
@@ -95,7 +95,7 @@ class NoCavitation:
         under the face-coefficient derivatives ``dcoeffs``, m^3/s per m of film (flat, size N each).
 
         The system is linear in the coefficients, so each slope is the part of its own cell's row of
-        :meth:`flux_change` that belongs to that face: :func:`cmpsim.reynolds.own_face_fluxes`, one
+        :meth:`flux_change` that belongs to that face: :func:`cmpsim.operators.reynolds.own_face_fluxes`, one
         pass (``coeffs`` and ``ops`` unused here).
         """
         return own_face_fluxes(grid, dcoeffs, phi)
@@ -129,13 +129,13 @@ class GumbelCavitation(NoCavitation):
 
 
 class JFOCavitation(NoCavitation):
-    """Mass-conserving JFO cavitation: unknowns p and 1 - theta (:class:`cmpsim.cavitation.CavitationSystem`).
+    """Mass-conserving JFO cavitation: unknowns p and 1 - theta (:class:`cmpsim.operators.cavitation.CavitationSystem`).
 
-    On a rigid pad the unknown is that of :class:`~cmpsim.cavitation.CavitationSystem`: p on
+    On a rigid pad the unknown is that of :class:`~cmpsim.operators.cavitation.CavitationSystem`: p on
     the full film, r = 1 - theta on the cavitated cells, solved by the primal-dual active set.
     The system is a complementarity problem, so the coarse-grid starts do not take it.
 
-    On a compliant pad (:mod:`cmpsim.compliance`) the film and the pad deflection are solved
+    On a compliant pad (:mod:`cmpsim.operators.compliance`) the film and the pad deflection are solved
     together by Newton's method, and the complementarity is carried by one universal variable
     psi per cell, Pa (in the spirit of Elrod's switch function; Giacopini et al. 2010 for the
     complementarity):
@@ -198,7 +198,7 @@ class JFOCavitation(NoCavitation):
     def residual(self, grid, coeffs, psi):
         """(R, dR/dpsi): the mass balance R = A p + B theta + c per cell, m^3/s (flat), of the
         universal variable psi, with its derivative on the side of p_cav each cell is on:
-        A diag(full) + B diag(cavitated) / s (:mod:`cmpsim.cavitation`)."""
+        A diag(full) + B diag(cavitated) / s (:mod:`cmpsim.operators.cavitation`)."""
         psi = np.asarray(psi).ravel()
         A = assemble_operator(grid, coeffs)
         B, c = upwind_couette_matrix(grid, coeffs)

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 from .._version import __version__
-from ..config import Config
+from ..inputs.config import Config
 from .checks import SIMILAR, SLIGHT, STATEMENTS, Statement, StatementResult, evaluate_statements
 from .paper import BASE_LOAD_PSI, BASE_SPEED_RPM, CURVES, FIGURES, LOADS_PSI, SPEEDS_RPM, Curve, FigureSpec, Point, RunData, _solve_all
 from .report import CSV_COLUMNS, FigureResult, ReproductionReport, _blocks, _csv_rows, _notes, FigureWriter, _render_html, _render_md, _write_csv, _write_csv_trends

@@ -13,10 +13,10 @@ from typing import Any
 
 import numpy as np
 
-from .. import units
-from ..config import Config
-from ..model import build_problem, reference_config
-from ..studies import PointCache, Progress, config_key, predict_start
+from ..inputs import units
+from ..inputs.config import Config
+from ..solver.model import build_problem, reference_config
+from ..solver.points import PointCache, Progress, config_key, predict_start
 
 __all__ = ["CURVES", "FIGURES", "LOADS_PSI", "SPEEDS_RPM", "Curve", "FigureSpec", "Point", "RunData"]
 
@@ -155,7 +155,7 @@ def _solve_all(base: Config, progress: bool, on_curve=None) -> tuple[RunData, in
     figures of that curve can be drawn while the next ones are solved).
 
     The relative removal rate is normalised by this run's own solve of the reference case
-    (:class:`cmpsim.studies.PointCache`), one of the planned points: exactly 1 there.
+    (:class:`cmpsim.solver.points.PointCache`), one of the planned points: exactly 1 there.
     """
     plan = _plan(base)
     total = len({config_key(cfg) for *_, cfg in plan} | {config_key(reference_config(cfg)) for *_, cfg in plan})

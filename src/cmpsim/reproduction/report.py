@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from .. import units
+from ..inputs import units
 from .._version import __version__
-from ..config import Config
+from ..inputs.config import Config
 from ..tables import markdown_table
 from .checks import SIMILAR, SLIGHT, StatementResult
 from .paper import CURVES, LOADS_PSI, SPEEDS_RPM, FigureSpec, RunData
@@ -435,7 +435,7 @@ def _notes(data: RunData, failures: list[str]) -> list[str]:
         )
     notes.append(
         "Relative removal rate (Figs. 11-12): removal_rate_mean / removal_rate_mean of the LEP case d = 100 nm, σ = 15 μm, 4 psi, 60 rpm "
-        "with every other input equal (cmpsim.model.REFERENCE_CASE), as in the paper."
+        "with every other input equal (cmpsim.solver.model.REFERENCE_CASE), as in the paper."
     )
     notes.append(
         "The paper compares Figs. 3-4 with measurements of Lu et al. (J. Electrochem. Soc. 151, G241, 2004); those data were "

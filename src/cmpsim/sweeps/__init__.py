@@ -22,7 +22,7 @@ Each point is one dask task. Points are grouped into *chains* along the last num
 and each task of a chain is submitted when the previous point of its chain has come back, with
 the converged records of the one or two previous points as plain arguments (not as dask
 dependencies, which would pin a chain to one worker). The start of Newton is predicted from
-them (see :func:`cmpsim.studies.predict_start`); if a predicted start fails, the point is solved again from the cold
+them (see :func:`cmpsim.solver.points.predict_start`); if a predicted start fails, the point is solved again from the cold
 start. The result of a point therefore depends only on the chain layout, never on how many
 workers there are or on the order in which points finish.
 
@@ -53,7 +53,7 @@ from pathlib import Path
 from typing import Callable, Mapping
 
 from .dataset import STATUS_MEANINGS, _build_dataset, _check_out, _write, summary_lines
-from ..studies import Progress
+from ..solver.points import Progress
 from .executors import _run_dask, _run_serial, _with_client, local_cluster
 # the per-point function; the executors look it up here at call time, so a test can replace it
 from .executors import _run_point  # noqa: F401

@@ -11,8 +11,8 @@ from typing import Iterable
 import numpy as np
 
 from .._version import __version__
-from .. import outputs
-from ..config import PARAMETERS
+from ..results import outputs
+from ..inputs.config import PARAMETERS
 from .spec import SweepError, SweepSpec, _is_string_param
 
 __all__ = ["STATUS_MEANINGS", "summary_lines"]
@@ -52,7 +52,7 @@ def _coord_attrs(name: str) -> dict:
 def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: str, warm_start: bool, chain_length: int):
     import xarray as xr
 
-    from ..result import REFERENCES
+    from ..results.result import REFERENCES
 
     shape = spec.shape
     dims = spec.dims
@@ -84,7 +84,7 @@ def _build_dataset(spec: SweepSpec, chains, records: dict[str, dict], identity: 
                 arrays[k][idx] = v
     data_vars = {}
     for k in keys:
-        # the attributes of the single-result NetCDF (cmpsim.outputs): units, long_name, CF flags
+        # the attributes of the single-result NetCDF (cmpsim.results.outputs): units, long_name, CF flags
         attrs = dict(outputs.scalar(k).cf_attrs) if k in _SCALAR_NAMES else {}
         if _dtype(k) == "bool":
             attrs["flag_values"] = np.array(attrs["flag_values"], dtype=np.int8)

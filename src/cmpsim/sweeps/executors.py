@@ -14,8 +14,8 @@ import time
 import uuid
 from functools import lru_cache
 
-from ..config import Config
-from ..studies import predict_start
+from ..inputs.config import Config
+from ..solver.points import predict_start
 from .plan import _PlanPoint
 from .spec import SweepError
 
@@ -29,8 +29,8 @@ def _base_config(base_json: str) -> Config:
 
 def _run_point(task: dict, prev=None, prev2=None) -> dict:
     """Solve one point; never raises (failures are returned as records)."""
-    from ..model import build_problem
-    from ..studies import solve_point
+    from ..solver.model import build_problem
+    from ..solver.points import solve_point
 
     t0 = time.perf_counter()
     rec = {
@@ -59,7 +59,7 @@ def _run_point(task: dict, prev=None, prev2=None) -> dict:
     out = solve_point(cfg, start=start, relative=True, problem=problem)  # the problem built above, not again
     rec["start"] = out.start
     if out.ok:
-        rec["scalars"] = dict(out.result.scalars)  # values and diagnostics, registry names (cmpsim.outputs)
+        rec["scalars"] = dict(out.result.scalars)  # values and diagnostics, registry names (cmpsim.results.outputs)
         rec["u"] = [float(v) for v in out.result.solution.state.u]
     else:
         rec.update(status="failed", error=out.error)

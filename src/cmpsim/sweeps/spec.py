@@ -18,8 +18,8 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from .. import units
-from ..config import PARAMETERS, Config, parse_value
+from ..inputs import units
+from ..inputs.config import PARAMETERS, Config, parse_value
 
 __all__ = ["Axis", "SweepSpec", "SweepError", "DEFAULT_MAX_POINTS"]
 
@@ -41,7 +41,7 @@ def _si_value(name: str, value: Any, where: str) -> Any:
     """SI value of one swept value, checking the name, type and unit dimension but not the range.
 
     Out-of-range values are kept: the point is then recorded as ``invalid`` with the
-    message of :func:`cmpsim.config.parse_value`, not dropped and not fatal.
+    message of :func:`cmpsim.inputs.config.parse_value`, not dropped and not fatal.
     """
     if name not in PARAMETERS:
         raise SweepError(f"{where}: unknown setting {name!r} (see `cmpsim params` for the names)")

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..grid import PolarGrid
-from ..reynolds import FaceCoefficients, ReynoldsSystem
+from ..numerics.grid import PolarGrid
+from ..operators.reynolds import FaceCoefficients, ReynoldsSystem
 
 __all__ = ["manufactured_errors", "central_difference_jacobian"]
 

@@ -20,12 +20,14 @@ __all__ = ["FLOORS", "UTILITIES", "MODEL_OPTIONS", "source_modules", "imports_of
 
 #: (floor, what it holds, rooms), bottom first. A room is a module or a package of cmpsim.
 FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
-    ("kernels", "pure vectorised physics, each function an equation of the paper; the elastic pad stack; rotation averages and uniformity; the hand-written GMRES", ("grainflow", "flowfactors", "contact", "geometry", "kinematics", "removal", "abrasion", "kinetics", "materials", "padstack", "padinfluence", "uniformity", "krylov", "grooves")),
-    ("discretisation", "the polar grid and its face operators; the guarded sparse LU; the sparse Reynolds and cavitation systems and the pad-coupled Newton matrix; the layered pad on the grid; the wafer as a plate", ("grid", "sparse", "fvassembly", "reynolds", "coupling", "padgrid", "cavitation", "plate")),
-    ("solver", "the models of the four axes and their registry; the wafer problem; the film coupled with the pad deflection, and with the position in one Newton iteration; its linear response to the carrier's film; load balance and Newton on the wafer position", ("state", "compliance", "compliantfilm", "jointnewton", "sensitivity", "models", "wafer", "loadbalance", "equilibrium", "membrane")),
-    ("inputs", "the registries: inputs with units, ranges and sources (one entry and its range check; inputs another input sets); outputs with units and meanings", ("units", "param", "config", "derived", "outputs")),
-    ("operating point", "one Config in, one Result out", ("setup", "postprocess", "result", "model")),
-    ("studies", "many points: the shared runner and the four studies; test tools", ("studies", "zone_response", "tuning", "head_sweep", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
+    ("kernels", "pure vectorised physics, each function an equation of the paper or a source: grain flow, flow factors, contact, geometry, kinematics, removal, abrasion, kinetics, materials, the elastic pad stack, the grooves", ("physics",)),
+    ("numerics", "the polar grid and its face operators; the finite-volume assembly; the guarded sparse LU; the hand-written GMRES; the layered pad on the grid; the wafer as a plate", ("numerics",)),
+    ("operators", "the coupled operators the plug-ins use: the sparse Reynolds and cavitation systems, the pad-coupled Newton matrix, the film with the pad deflection and with the position in one Newton iteration, its linear response, the state, the membrane's bending", ("operators",)),
+    ("models", "the models of the four axes and their registry", ("models",)),
+    ("inputs", "the registries of the inputs: units, ranges and sources (one entry and its range check); the configuration; inputs another input sets", ("inputs",)),
+    ("results", "the outputs with units and meanings; the result of one point; uniformity", ("results",)),
+    ("solver", "the driver: set-up, the wafer problem, load balance, equilibrium, post-processing; one Config in, one Result out; the runner every study shares", ("solver",)),
+    ("studies", "many points: the head's studies, sweeps, validation, reproduction, calibration, the die model; test tools", ("head", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.
@@ -89,7 +91,7 @@ def floor_of(module: str) -> int | None:
 
 
 def _target(name: str, modules: dict[str, Path]) -> str:
-    """An imported name resolved to a module: ``cmpsim.config.Config`` is not a module, ``cmpsim.config`` is."""
+    """An imported name resolved to a module: ``cmpsim.inputs.config.Config`` is not a module, ``cmpsim.inputs.config`` is."""
     while name not in modules and "." in name:
         name = name.rpartition(".")[0]
     return name
@@ -148,7 +150,7 @@ def import_cycles(root: Path, top_level_only: bool = True) -> list[list[str]]:
 MODEL_OPTIONS = ("pad_compliance", "slurry_model", "cavitation", "removal_law", "carrier", "removal_kinetics", "abrasive", "film")
 #: The modules allowed to read an option's name: where the inputs are checked and where the
 #: models are picked by name (the registry).
-OPTION_READERS = ("cmpsim.config", "cmpsim.setup", "cmpsim.models")
+OPTION_READERS = ("cmpsim.inputs.config", "cmpsim.solver.setup", "cmpsim.models")
 
 
 def _option_ref(node: ast.AST) -> bool:

@@ -19,7 +19,7 @@ zero) pressure at both ends x = 0 and x = L:
   of fill fraction theta = h(x_c)/h(x) up to the reformation point x_r, and a full film from
   x_r (p = p_cav) to the outlet (p = 0) carrying the same flux Q.
 - :func:`strip_problem`: the one-dimensional analogue of the wafer discretisation (the same
-  face-coefficient kernel :func:`cmpsim.reynolds.lubrication_coefficients`, two-point
+  face-coefficient kernel :func:`cmpsim.operators.reynolds.lubrication_coefficients`, two-point
   fluxes, Dirichlet ends half a cell from the last centres, upwinded fill fraction), so that
   the complementarity solver can be compared with the references above.
 
@@ -35,7 +35,7 @@ import scipy.sparse as sp
 from scipy.integrate import quad
 from scipy.optimize import brentq
 
-from ..reynolds import LubricationParameters, lubrication_coefficients
+from ..operators.reynolds import LubricationParameters, lubrication_coefficients
 
 __all__ = [
     "plane_slider_pressure",
@@ -204,7 +204,7 @@ def strip_problem(n: int, length: float, h1: float, h2: float, params: Lubricati
 
     ``params`` must be Newtonian with ``kinematics.mode == "sliding"`` (the pad moves in +x
     at U under a still wafer); the face coefficients come from
-    :func:`cmpsim.reynolds.lubrication_coefficients` at the n + 1 faces.
+    :func:`cmpsim.operators.reynolds.lubrication_coefficients` at the n + 1 faces.
     """
     dx = length / n
     xf = np.arange(n + 1) * dx

@@ -1,4 +1,4 @@
-"""Closed-form solutions of the free circular Kirchhoff plate, for the tests of :mod:`cmpsim.plate`.
+"""Closed-form solutions of the free circular Kirchhoff plate, for the tests of :mod:`cmpsim.numerics.plate`.
 
 Both satisfy D del^4 w + k w = q on r < a with the free-edge conditions M_r = V_r = 0
 (Timoshenko & Woinowsky-Krieger, *Theory of Plates and Shells*, 1959, sections 61-62; Leissa,

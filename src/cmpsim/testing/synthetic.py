@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from ..config import Config
+from ..inputs.config import Config
 from ..io import atomic_write_text
-from ..studies import solve_point
+from ..solver.points import solve_point
 from ..validation import QUANTITIES, model_value, point_config
 
 __all__ = ["synthetic_dataset"]

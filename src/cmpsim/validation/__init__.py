@@ -31,8 +31,8 @@ order.
 
 from __future__ import annotations
 
-from ..config import Config
-from ..studies import Progress
+from ..inputs.config import Config
+from ..solver.points import Progress
 from .compare import (
     DatasetSummary,
     PointResult,

@@ -8,8 +8,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..config import Config
-from ..studies import PointCache
+from ..inputs.config import Config
+from ..solver.points import PointCache
 from .data import ORDER_TOLERANCE_DECADES, QUANTITIES, Dataset, from_si, point_config
 
 __all__ = ["PointResult", "DatasetSummary", "model_value", "fit_scale", "evaluate_dataset", "solve_points", "run_dataset"]
@@ -248,7 +248,7 @@ def solve_points(points, config: Config, relative: bool = False, warm: dict | No
     ``warm[conditions]`` when a ``warm`` dict is given (it is updated in place with every
     converged position, as calibration needs across its iterations), otherwise from the
     previous converged point; a failed warm start is retried cold
-    (:func:`cmpsim.studies.solve_point`). ``advance(ok)`` is called after every point.
+    (:func:`cmpsim.solver.points.solve_point`). ``advance(ok)`` is called after every point.
     """
     cache = PointCache(relative=relative)
     values, results, statuses = [], [], []

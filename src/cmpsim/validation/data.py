@@ -16,8 +16,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from .. import outputs, units
-from ..config import PARAMETERS, Config
+from ..results import outputs
+from ..inputs import units
+from ..inputs.config import PARAMETERS, Config
 
 __all__ = [
     "QUANTITIES",
@@ -66,7 +67,7 @@ def _friction(result) -> float:
     return float(mu)
 
 
-#: The outputs of :mod:`cmpsim.outputs` that a data set may give (measurable results).
+#: The outputs of :mod:`cmpsim.results.outputs` that a data set may give (measurable results).
 MEASURABLE_OUTPUTS = (
     "film_thickness_center",
     "film_thickness_mean",
@@ -94,7 +95,7 @@ def _from_registry(name: str) -> tuple[str, str, str, Callable[[Any], float]]:
 
 
 #: Measurable quantity -> (SI unit for pint, display unit for tables/plots, description, model
-#: extractor): the measurable outputs of the registry (:mod:`cmpsim.outputs`), their 0.1 names
+#: extractor): the measurable outputs of the registry (:mod:`cmpsim.results.outputs`), their 0.1 names
 #: (``film_thickness`` = ``film_thickness_center``, ``removal_rate`` = ``removal_rate_mean``),
 #: and two quantities derived here (largest film, friction coefficient).
 QUANTITIES: dict[str, tuple[str, str, str, Callable[[Any], float]]] = {

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import Config
+from ..inputs.config import Config
 from ..tables import markdown_table, text_table
 from .compare import DatasetSummary, PointResult
 from .data import QUANTITIES, from_si, to_si

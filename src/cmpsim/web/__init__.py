@@ -1,7 +1,7 @@
 """``cmpsim serve``: a browser UI and a JSON HTTP API over :func:`cmpsim.solve` and :func:`cmpsim.sweep`.
 
 The page and the API are a thin client of the Python API: every solve goes through
-:meth:`cmpsim.config.Config.from_mapping`, :func:`cmpsim.solve` and the JSON serialisation
+:meth:`cmpsim.inputs.config.Config.from_mapping`, :func:`cmpsim.solve` and the JSON serialisation
 that ``cmpsim run --json`` prints; every sweep through :func:`cmpsim.sweeps.sweep` on a Dask
 cluster, as ``cmpsim sweep`` does. Nothing in this package knows physics.
 

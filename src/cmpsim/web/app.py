@@ -1,7 +1,7 @@
 """The FastAPI application of ``cmpsim serve``: the JSON HTTP API and the page that uses it.
 
-Every route ends in the Python API: ``/api/solve`` in :meth:`cmpsim.config.Config.from_mapping`,
-:func:`cmpsim.solve` and :meth:`cmpsim.result.Result.to_json` (the object ``cmpsim run --json``
+Every route ends in the Python API: ``/api/solve`` in :meth:`cmpsim.inputs.config.Config.from_mapping`,
+:func:`cmpsim.solve` and :meth:`cmpsim.results.result.Result.to_json` (the object ``cmpsim run --json``
 prints); ``/api/sweeps`` in :func:`cmpsim.sweeps.sweep` (see :mod:`cmpsim.web.jobs`);
 ``/api/validate`` in :func:`cmpsim.validation.validate`. Bad input gets HTTP 422 with cmpsim's
 own message and the parameter it names (``{"detail": ..., "parameter": ...}``); nothing the
@@ -171,8 +171,8 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
         include: Literal["fields"] | None = Query(None, description="fields: add the wafer maps"),
         fields: str | None = Query(None, description="comma-separated field names for include=fields (default all)"),
     ):
-        from ..equilibrium import EquilibriumError
-        from ..model import solve
+        from ..solver.equilibrium import EquilibriumError
+        from ..solver.model import solve
 
         cfg = config_from_request(payload)
         limits.check_grid(cfg.numerics.grid)
@@ -211,9 +211,9 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
         bounds: str = Query("0.5,8 psi", description="bounds of every zone pressure: LOW,HIGH and one unit"),
         keep: Literal["pressure", "rate"] | None = Query(None, description="also keep the mean pressure or the mean rate"),
     ):
-        from ..equilibrium import EquilibriumError
-        from ..tuning import tune_zones
-        from ..units import parse_list
+        from ..solver.equilibrium import EquilibriumError
+        from ..head.tuning import tune_zones
+        from ..inputs.units import parse_list
 
         cfg = config_from_request(payload)
         limits.check_grid(cfg.numerics.grid)

@@ -87,7 +87,7 @@ class SweepJob:
 
     def layout(self) -> dict:
         """Dimensions, SI coordinates and units of the sweep (what a client needs to draw it)."""
-        from ..config import PARAMETERS, to_display
+        from ..inputs.config import PARAMETERS, to_display
 
         coords = {d: [_plain(v) for v in self.spec.coords[d]] for d in self.spec.dims}
         units = {d: (PARAMETERS[d].unit if PARAMETERS[d].unit not in ("choice", "grid") else "") for d in self.spec.dims}

@@ -18,7 +18,7 @@ __all__ = ["Limits", "LimitError", "Busy", "JobSlots", "BodySizeLimit", "grid_ce
 
 def grid_cells(grid: str) -> tuple[int, int, int]:
     """(rings, sectors, cells) of a grid setting (preset or ``NRxNT``); ValueError if malformed."""
-    from ..config import Config
+    from ..inputs.config import Config
 
     n_r, n_t = Config.default().replace(grid=grid).grid_shape
     return n_r, n_t, n_r * n_t

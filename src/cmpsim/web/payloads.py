@@ -1,4 +1,4 @@
-"""Requests in, answers out: a request body to a :class:`~cmpsim.config.Config`, results and the
+"""Requests in, answers out: a request body to a :class:`~cmpsim.inputs.config.Config`, results and the
 registries to JSON.
 
 Bad input raises :class:`InputError` with cmpsim's own message and the parameter it names, which
@@ -72,7 +72,7 @@ def setting_names(data: Any) -> list[str]:
 
 def check_scalars(data: dict, where: str = "") -> None:
     """Refuse a JSON value that is no number or string (an object, array, boolean or null) for an input."""
-    from ..config import PARAMETERS
+    from ..inputs.config import PARAMETERS
 
     for key, value in data.items():
         if key in SECTIONS and isinstance(value, dict):
@@ -88,8 +88,8 @@ def check_scalars(data: dict, where: str = "") -> None:
 
 
 def config_from_request(data: Any):
-    """The :class:`~cmpsim.config.Config` of a request body (flat or sectioned; units or SI numbers)."""
-    from ..config import Config
+    """The :class:`~cmpsim.inputs.config.Config` of a request body (flat or sectioned; units or SI numbers)."""
+    from ..inputs.config import Config
 
     if data is None:
         data = {}
@@ -110,7 +110,7 @@ def finite(v):
 
 
 def fields_payload(result, names: list[str] | None) -> dict:
-    """The wafer maps of :attr:`cmpsim.result.Result.fields` as JSON (NaN outside the wafer -> null)."""
+    """The wafer maps of :attr:`cmpsim.results.result.Result.fields` as JSON (NaN outside the wafer -> null)."""
     import numpy as np
 
     ds = result.fields
@@ -136,7 +136,7 @@ def fields_payload(result, names: list[str] | None) -> dict:
 
 def params_payload() -> dict:
     """``GET /api/params``: every input with its section, unit, display unit, default, range, source and choices."""
-    from ..config import PARAMETERS, format_display, to_display
+    from ..inputs.config import PARAMETERS, format_display, to_display
 
     def shown(name, v):
         if v is None:
@@ -176,7 +176,7 @@ def params_payload() -> dict:
 
 def outputs_payload() -> list[dict]:
     """``GET /api/outputs``: every scalar output of the registry with its SI and display units."""
-    from .. import outputs
+    from ..results import outputs
 
     return [
         {"name": o.name, "kind": o.kind, "unit": o.unit, "display_unit": o.display_unit, "display_factor": o.display_factor, "long_name": o.long_name}

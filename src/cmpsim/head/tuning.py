@@ -1,0 +1,396 @@
+"""Zone tuning, the inverse problem of the membrane head: zone pressures that flatten the removal profile.
+
+The removal-rate profile RR(r) (rotation average, :mod:`cmpsim.results.uniformity`) of a membrane head
+depends on its zone pressures P_k. :func:`tune_zones` finds, within bounds, the pressures that
+minimise the area-weighted variance of the profile inside the edge exclusion, the square of the
+within-wafer non-uniformity times the mean:
+
+    minimise  sum_i a_i (RR_i(P) - m)^2     over P (and the level m),   P_lo <= P_k <= P_hi,
+
+optionally keeping the mean pressure (the load) or the mean rate of the start. Given an incoming
+thickness profile t_in(r) and a polish time T, the flattened quantity is instead the remaining
+thickness t_in(r) - RR(r) T (:func:`read_incoming` reads the profile from a CSV file). Each step is a
+Gauss-Newton step on the zone response J_ik = d RR_i / d P_k, measured by finite differences of
+warm-started solves (the equilibrium and the wafer's bending of the current pressures as the
+start), solved as a bounded linear least-squares problem (:func:`scipy.optimize.lsq_linear`,
+Branch & al.'s trust-region reflective method) inside a trust region, a box of half-width Delta
+around the pressures: the step is kept if the solved profile is flatter; otherwise Delta is
+halved and the step solved again. Delta starts at :data:`TRUST_START` of the largest start
+pressure and follows the ratio of the achieved to the linearly predicted gain (Nocedal & Wright,
+*Numerical Optimization*, 2006, algorithm 4.1): halved below 1/4, doubled above 3/4 for a step
+that reached the box. The zone responses of a membrane head overlap (a zone's pressure moves the
+rate far outside it), so the least-squares problem is ill-conditioned and an unbounded
+Gauss-Newton step can ask for pressures the linearisation does not describe.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import csv
+from pathlib import Path
+
+import numpy as np
+from scipy.optimize import lsq_linear
+
+from .. import models
+from ..inputs.config import Config
+from ..operators.state import EquilibriumError
+from ..results.uniformity import ring_areas_inside, weighted_std_over_mean
+from ..inputs.units import to_si
+from .zone_response import RESPONSE_STEP, ZoneSolver, boundary_widths, inside_share, profile_of, response_matrix
+
+__all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "KEEP", "LENGTH_UNITS"]
+
+PSI = 6894.757293168361
+#: Default bounds of the zone pressures, Pa (0.5-8 psi, issue 25).
+DEFAULT_BOUNDS = (0.5 * PSI, 8.0 * PSI)
+#: The first step's trust region, a fraction of the largest start pressure: no zone moves further.
+TRUST_START = 0.25
+#: Shrinks of the trust region in a step whose trial does not flatten the profile, before the tuning stops.
+MAX_SHRINKS = 4
+#: What a tuning may keep fixed besides flattening.
+KEEP = (None, "pressure", "rate")
+#: Units a column of an incoming-thickness CSV may name in its header (``radius_mm``), in m.
+LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9, "angstrom": 1e-10}
+
+
+def read_incoming(path) -> tuple[np.ndarray, np.ndarray]:
+    """An incoming thickness profile from a CSV file: (radius, thickness), both in m.
+
+    The file has a header row naming two columns with their units, ``radius_<unit>`` and
+    ``thickness_<unit>`` (any order; units from :data:`LENGTH_UNITS`, e.g. ``radius_mm,thickness_nm``),
+    then one row of numbers per radius. Radii must be non-negative and strictly increasing, the
+    thickness positive and finite. Raises ``ValueError`` naming the file, the row or column and
+    what is wrong; ``OSError`` is turned into a ``ValueError`` too.
+    """
+    path = Path(path)
+    try:
+        with path.open(newline="") as fh:
+            rows = [row for row in csv.reader(fh) if row and any(c.strip() for c in row)]
+    except OSError as exc:
+        raise ValueError(f"incoming: cannot read {path}: {exc}") from None
+    if not rows:
+        raise ValueError(f"incoming: {path} is empty; expected a header 'radius_mm,thickness_nm' and rows of numbers")
+    header = [c.strip().lower() for c in rows[0]]
+    columns = {}
+    for j, name in enumerate(header):
+        quantity, _, unit = name.partition("_")
+        if quantity not in ("radius", "thickness"):
+            raise ValueError(f"incoming: {path} header column {name!r} is not radius_<unit> or thickness_<unit> (e.g. 'radius_mm,thickness_nm')")
+        if unit not in LENGTH_UNITS:
+            raise ValueError(f"incoming: {path} column {name!r}: unit {unit!r} not known; use one of {', '.join(LENGTH_UNITS)}")
+        if quantity in columns:
+            raise ValueError(f"incoming: {path} names the {quantity} column twice")
+        columns[quantity] = (j, LENGTH_UNITS[unit])
+    if set(columns) != {"radius", "thickness"} or len(header) != 2:
+        raise ValueError(f"incoming: {path} header must name exactly two columns, radius_<unit> and thickness_<unit>; got {rows[0]}")
+    data = []
+    for n, row in enumerate(rows[1:], start=2):
+        if len(row) != 2:
+            raise ValueError(f"incoming: {path} row {n} has {len(row)} values; expected 2")
+        try:
+            data.append([float(c) for c in row])
+        except ValueError:
+            raise ValueError(f"incoming: {path} row {n} is not two numbers: {row}") from None
+    if len(data) < 2:
+        raise ValueError(f"incoming: {path} has {len(data)} data rows; a profile needs at least 2")
+    data = np.array(data)
+    (jr, fr), (jt, ft) = columns["radius"], columns["thickness"]
+    return _checked_incoming(data[:, jr] * fr, data[:, jt] * ft, str(path))
+
+
+def _checked_incoming(radius, thickness, source: str = "incoming") -> tuple[np.ndarray, np.ndarray]:
+    """(radius, thickness) as float arrays, m, after checking them (ValueError naming ``source``)."""
+    r = np.asarray(radius, dtype=float)
+    t = np.asarray(thickness, dtype=float)
+    if r.ndim != 1 or r.shape != t.shape or r.size < 2:
+        raise ValueError(f"incoming ({source}): radius and thickness must be 1-D arrays of the same length >= 2; got shapes {r.shape} and {t.shape}")
+    if not (np.all(np.isfinite(r)) and np.all(np.isfinite(t))):
+        raise ValueError(f"incoming ({source}): radius and thickness must be finite numbers")
+    if r[0] < 0 or np.any(np.diff(r) <= 0):
+        raise ValueError(f"incoming ({source}): radii must be >= 0 and strictly increasing")
+    if np.any(t <= 0):
+        i = int(np.argmin(t))
+        raise ValueError(f"incoming ({source}): thickness must be positive; got {t[i]:g} m at radius {r[i]:g} m")
+    return r, t
+
+
+@dataclass
+class ZoneTuning:
+    """The result of :func:`tune_zones` (SI: Pa, m, m/s; non-uniformity as a fraction).
+
+    ``zone_pressures`` the tuned pressures; ``within_wafer_nonuniformity`` and ``profile``
+    (radius, rate) of the tuned solve, ``before`` the same of the start; ``response`` the last
+    zone response d RR_i / d P_k (rings x zones, m/s/Pa); ``solves`` the operating points solved.
+    With an incoming profile: ``polish_time`` (s), ``remaining_thickness`` (radius, thickness; m)
+    and ``remaining_nonuniformity`` (fraction) of the tuned pressures, and the same in ``before``;
+    ``within_wafer_nonuniformity`` stays that of the removal profile; ``history`` holds
+    (pressures, objective) of each accepted step, the objective being the remaining thickness's
+    non-uniformity then.
+    """
+
+    zone_radii: tuple
+    zone_pressures: tuple
+    within_wafer_nonuniformity: float
+    profile: dict
+    before: dict
+    response: np.ndarray
+    config: Config
+    solves: int
+    ring_faces: np.ndarray  # radii of the grid's ring faces, m
+    history: list = field(default_factory=list)
+    polish_time: float | None = None
+    remaining_thickness: dict | None = None
+    remaining_nonuniformity: float | None = None
+
+    @property
+    def response_inside(self) -> tuple:
+        """Share of each zone's removal response that falls inside the zone itself (fraction per zone;
+        :func:`cmpsim.head.zone_response.inside_share`): 1 when a zone moves the rate only under itself,
+        the zone's area share when its pressure moves the wafer as a whole."""
+        return inside_share(self.response, self.profile["radius"], self.ring_faces, self.zone_radii)
+
+    @property
+    def response_widths(self) -> list:
+        """The 10-90 % response width at each inner zone boundary (:func:`cmpsim.head.zone_response.boundary_widths`)."""
+        return boundary_widths(self.response, self.profile["radius"], self.ring_faces, self.zone_radii)
+
+    def to_dict(self) -> dict:
+        """The JSON object of ``cmpsim tune-zones --json`` (SI units)."""
+        out = {
+            "zone_radii": list(self.zone_radii),
+            "zone_pressures": list(self.zone_pressures),
+            "within_wafer_nonuniformity": self.within_wafer_nonuniformity,
+            "profile": {k: list(map(float, v)) for k, v in self.profile.items()},
+            "before": {
+                "zone_pressures": list(self.before["zone_pressures"]),
+                "within_wafer_nonuniformity": self.before["within_wafer_nonuniformity"],
+                "profile": {k: list(map(float, v)) for k, v in self.before["profile"].items()},
+            },
+            "zone_response_inside": list(self.response_inside),
+            "zone_response_width": [b.to_dict() for b in self.response_widths],
+            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1", "zone_response_width": "m"},
+            "solves": self.solves,
+        }
+        if self.remaining_thickness is not None:
+            out["polish_time"] = self.polish_time
+            out["remaining_thickness"] = {k: list(map(float, v)) for k, v in self.remaining_thickness.items()}
+            out["remaining_nonuniformity"] = self.remaining_nonuniformity
+            out["before"]["remaining_thickness"] = {k: list(map(float, v)) for k, v in self.before["remaining_thickness"].items()}
+            out["before"]["remaining_nonuniformity"] = self.before["remaining_nonuniformity"]
+            out["units"].update(polish_time="s", thickness="m", remaining_nonuniformity="1")
+        return out
+
+
+def _weights(result) -> np.ndarray:
+    """Area of each ring inside the edge exclusion, m^2 (the weights of the output's non-uniformity)."""
+    return ring_areas_inside(result.grid.ring_faces, result.grid.radius - result.config.edge_exclusion)
+
+
+def _incoming_on_rings(incoming, result) -> np.ndarray:
+    """The incoming thickness (m) interpolated linearly onto the profile radii of ``result``.
+
+    The profile must cover the centre of every ring the non-uniformity weighs (inside the edge
+    exclusion); otherwise ValueError naming the range needed and the range given.
+    """
+    r_in, t_in = incoming
+    radius = profile_of(result)["radius"]
+    used = radius[_weights(result) > 0]
+    if r_in[0] > used[0] or r_in[-1] < used[-1]:
+        raise ValueError(
+            f"incoming: the profile covers radii {1e3 * r_in[0]:g}-{1e3 * r_in[-1]:g} mm; it must cover "
+            f"{1e3 * used[0]:g}-{1e3 * used[-1]:g} mm (the centres of the rings inside the wafer radius minus the edge exclusion)"
+        )
+    return np.interp(radius, r_in, t_in)
+
+
+def _remaining(result, thickness, polish_time) -> np.ndarray:
+    """Remaining thickness t_in - RR polish_time on the profile radii, m."""
+    return thickness - profile_of(result)["rate"] * polish_time
+
+
+def _check_not_through(remaining, result, polish_time, which: str) -> None:
+    """Refuse a polish that removes more than the incoming film anywhere inside the edge exclusion."""
+    inside = _weights(result) > 0
+    if np.any(remaining[inside] <= 0):
+        i = int(np.argmin(np.where(inside, remaining, np.inf)))
+        r = profile_of(result)["radius"][i]
+        raise ValueError(
+            f"polish_time = {polish_time:g} s removes more than the incoming thickness {which}: remaining "
+            f"{remaining[i]:g} m at radius {1e3 * r:g} mm; shorten polish_time"
+        )
+
+
+def tune_zones(
+    config: Config,
+    bounds=DEFAULT_BOUNDS,
+    keep: str | None = None,
+    max_steps: int = 6,
+    rtol: float = 1e-3,
+    incoming=None,
+    polish_time=None,
+) -> ZoneTuning:
+    """Zone pressures of a membrane head that flatten its removal-rate profile, or the film left after polishing.
+
+    Parameters
+    ----------
+    config : Config
+        A membrane head (``carrier = "membrane"``); its ``zone_pressures`` (or ``applied_pressure`` in
+        every zone) are the start.
+    bounds : (low, high)
+        Bounds of every zone pressure, Pa or text with units (default 0.5-8 psi).
+    keep : None, "pressure" or "rate"
+        Also keep the mean pressure (the load) or the mean removal rate of the start.
+    max_steps : int
+        Gauss-Newton steps at most (each costs one solve per zone and one of the step).
+    rtol : float
+        Stop when a step lowers the non-uniformity by less than this fraction of it.
+    incoming : path, or (radius, thickness) arrays in m, optional
+        An incoming film thickness profile (a CSV file read by :func:`read_incoming`). Then the
+        pressures flatten the remaining thickness t_in(r) - RR(r) polish_time (t_in interpolated
+        linearly onto the profile radii) instead of the rate; ``keep = "rate"`` keeps the mean rate.
+    polish_time : float (s) or text with units
+        The polish time; required with ``incoming``, refused without it.
+
+    Returns
+    -------
+    ZoneTuning
+
+    Raises
+    ------
+    ValueError
+        Not a membrane head, or bad bounds (naming them); the start outside the bounds; a bad
+        incoming profile (naming the file, row or column), one that does not cover the rings inside
+        the edge exclusion, or a polish time that removes more than the incoming film anywhere
+        inside the edge exclusion at the start or the tuned pressures.
+    cmpsim.EquilibriumError
+        A solve at the start failed.
+    """
+    if not models.carrier(config).has_zones:
+        raise ValueError(f"tune_zones needs carrier = 'membrane' (zone pressures to tune); got carrier = {config.carrier!r}")
+    if keep not in KEEP:
+        raise ValueError(f"keep must be one of {KEEP}; got {keep!r}")
+    lo, hi = (to_si(b, "Pa", "bounds", example="psi") for b in bounds)
+    if not (0 < lo < hi):
+        raise ValueError(f"bounds must be 0 < low < high (Pa); got ({lo:g}, {hi:g}) Pa")
+    if (incoming is None) != (polish_time is None):
+        raise ValueError("incoming and polish_time go together: give both (the incoming thickness profile and the polish time) or neither")
+    if incoming is not None:
+        if isinstance(incoming, (str, Path)):
+            incoming = read_incoming(incoming)
+        elif len(incoming) == 2:
+            incoming = _checked_incoming(*incoming)
+        else:
+            raise ValueError(f"incoming must be a CSV path or a (radius, thickness) pair of arrays in m; got {len(incoming)} items")
+        polish_time = to_si(polish_time, "s", "polish_time", example="min")
+        if not (np.isfinite(polish_time) and polish_time > 0):
+            raise ValueError(f"polish_time must be > 0 s; got {polish_time:g} s")
+    radii = config.zone_outer_radii
+    start = np.array(config.zone_pressure_values, dtype=float)
+    if np.any(start < lo) or np.any(start > hi):
+        raise ValueError(f"the start's zone pressures {', '.join(f'{p:g}' for p in start)} Pa lie outside the bounds [{lo:g}, {hi:g}] Pa")
+    run = ZoneSolver(config)
+    base = run(start)
+    run.adopt(base)
+    weights = _weights(base)
+    areas = np.diff(np.concatenate([[0.0], radii]) ** 2)  # zone areas / pi
+
+    if incoming is None:
+        scale = 1.0  # the flattened quantity q = RR, d q / d RR = 1
+        offset = np.zeros(weights.size)
+    else:  # q = t_in - RR T
+        scale, offset = -polish_time, _incoming_on_rings(incoming, base)
+        _check_not_through(_remaining(base, offset, polish_time), base, polish_time, "at the start's pressures")
+
+    def quantity(result) -> np.ndarray:
+        return offset + scale * profile_of(result)["rate"]
+
+    target = float(np.sum(weights * quantity(base)) / weights.sum())  # the start's mean of q
+
+    def nonuniformity_of(values) -> float:
+        return weighted_std_over_mean(values, weights)
+
+    def nonuniformity(result) -> float:
+        return nonuniformity_of(quantity(result))
+
+    current, pressures = base, start.copy()
+    wiwnu = nonuniformity(base)
+    history = [(tuple(pressures), wiwnu)]
+    response = np.zeros((weights.size, start.size))
+    delta = TRUST_START * float(np.max(start))  # the trust region: no zone moves by more than this in a step, Pa
+    for _ in range(max_steps):
+        rate = profile_of(current)["rate"]
+        q = quantity(current)
+        response = response_matrix(run, pressures, rate, high=hi, step=RESPONSE_STEP)  # warm-started from the current solve
+        # least squares in (dP, m): sqrt(a_i) (q_i + s J dP - m) -> 0, relative to the mean of q
+        w = np.sqrt(weights / weights.sum()) / abs(target)
+        A = np.hstack([w[:, None] * (scale * response), -w[:, None]])
+        b = -w * q
+        lower = np.concatenate([lo - pressures, [-np.inf]])
+        upper = np.concatenate([hi - pressures, [np.inf]])
+        rows, rhs = [A], [b]
+        if keep == "pressure":  # sum A_k dP_k = 0, weighted to dominate
+            rows.append(1e3 * np.concatenate([areas / areas.sum(), [0.0]])[None, :] / PSI)
+            rhs.append([0.0])
+        elif keep == "rate":  # the level m is the start's mean of q (of the rate, or t_in - rate T)
+            lower[-1], upper[-1] = target - 1e-12 * abs(target), target + 1e-12 * abs(target)
+        A_all, b_all = np.vstack(rows), np.concatenate(rhs)
+        accepted = False
+        for _shrink in range(MAX_SHRINKS + 1):
+            box_lo = np.concatenate([np.maximum(lower[:-1], -delta), lower[-1:]])
+            box_hi = np.concatenate([np.minimum(upper[:-1], delta), upper[-1:]])
+            step = lsq_linear(A_all, b_all, bounds=(box_lo, box_hi)).x[:-1]
+            trial = np.clip(pressures + step, lo, hi)
+            if np.max(np.abs(trial - pressures)) <= 1e-9 * float(np.max(pressures)):
+                break  # the linear model asks for no change: a (bounded) least-squares minimum
+            predicted = nonuniformity_of(q + scale * response @ (trial - pressures))
+            try:
+                result = run(trial)
+            except EquilibriumError:  # a step too far for the solver counts as one that does not flatten
+                delta = 0.5 * np.max(np.abs(trial - pressures))
+                continue
+            value = nonuniformity(result)
+            if value < wiwnu:
+                accepted = True
+                break
+            delta = 0.5 * np.max(np.abs(trial - pressures))
+        if not accepted:
+            break
+        # the trust radius follows how well the linear model predicted the gain (Nocedal & Wright 2006, alg. 4.1)
+        agreement = (wiwnu - value) / max(wiwnu - predicted, 1e-300)
+        moved = np.max(np.abs(trial - pressures))
+        if agreement < 0.25:
+            delta = 0.5 * moved
+        elif agreement > 0.75 and moved > 0.99 * delta:
+            delta = 2.0 * delta
+        gain = (wiwnu - value) / wiwnu
+        current, pressures, wiwnu = result, trial, value
+        run.adopt(result)
+        history.append((tuple(pressures), wiwnu))
+        if gain < rtol:
+            break
+    final_cfg = config.replace(zone_pressures=tuple(float(p) for p in pressures))
+    before = {"zone_pressures": tuple(start), "within_wafer_nonuniformity": weighted_std_over_mean(profile_of(base)["rate"], weights), "profile": profile_of(base)}
+    extra = {}
+    if incoming is not None:
+        remaining = _remaining(current, offset, polish_time)
+        _check_not_through(remaining, current, polish_time, "at the tuned pressures")
+        radius = profile_of(current)["radius"]
+        extra = dict(polish_time=polish_time, remaining_thickness={"radius": radius, "thickness": remaining}, remaining_nonuniformity=wiwnu)
+        before.update(remaining_thickness={"radius": radius, "thickness": _remaining(base, offset, polish_time)}, remaining_nonuniformity=history[0][1])
+        wiwnu = weighted_std_over_mean(profile_of(current)["rate"], weights)
+    return ZoneTuning(
+        zone_radii=tuple(radii),
+        zone_pressures=tuple(float(p) for p in pressures),
+        within_wafer_nonuniformity=wiwnu,
+        profile=profile_of(current),
+        before=before,
+        response=response,
+        config=final_cfg,
+        solves=run.solves,
+        ring_faces=np.asarray(base.grid.ring_faces, dtype=float),
+        history=history,
+        **extra,
+    )
+
