@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import cmpsim
-from cmpsim.abrasion import (
+from cmpsim.physics.abrasion import (
     AbrasiveContact,
     abrasive_removal_rate,
     groove_area,
@@ -22,8 +22,8 @@ from cmpsim.abrasion import (
     size_hardness,
     summit_sharing,
 )
-from cmpsim.contact import PadSurface, asperity_contact, asperity_laws, contact_spot_density
-from cmpsim.kinetics import chemical_rate, flash_temperature, series_rate
+from cmpsim.physics.contact import PadSurface, asperity_contact, asperity_laws, contact_spot_density
+from cmpsim.physics.kinetics import chemical_rate, flash_temperature, series_rate
 from cmpsim.models.removal_laws import abrasive_contact
 
 # silica (E 72 GPa, nu 0.17, H 9 GPa) on oxide (the same constants): the default pair
@@ -352,7 +352,7 @@ def test_the_removal_rates_quoted_in_the_docs_are_what_the_default_model_compute
 
 
 # ------------------------------------------------------------------ indentation size effect (13e.8)
-# alpha-alumina on copper (cmpsim.materials): the particle-film contact of Lai's size series
+# alpha-alumina on copper (cmpsim.physics.materials): the particle-film contact of Lai's size series
 def alumina_on_copper(**kw):
     ca, cf = (1 - 0.231**2) / 416e9, (1 - 0.34**2) / 128e9
     args = dict(diameter=300e-9, diameter_std=0.0, volume_fraction=0.03, pad_pressure=50e6, e_star=1 / (ca + cf),
@@ -493,3 +493,17 @@ def test_the_size_length_sweeps_in_micrometres_and_calibrates_from_a_size_series
     truth = cmpsim.Config.default().replace(grid="coarse", film="copper", abrasive="alumina", film_size_length="1 um")
     fit = _recalibrate(tmp_path, truth, "particle_diameter", ("100 nm", "400 nm", "1500 nm"), "film_size_length", "0.6 um")
     assert fit.values["film_size_length"] == pytest.approx(1e-6, rel=1e-3)
+
+
+def test_the_poisson_probabilities_equal_scipy_stats_bit_for_bit():
+    """The abrasive law's Poisson pmf and cdf (two scipy.special functions, so that a solve does
+    not load scipy.stats: issue 31) are scipy.stats.poisson's, bit for bit, on the range used."""
+    from scipy.stats import poisson
+
+    from cmpsim.physics.abrasion import poisson_cdf, poisson_pmf
+
+    k = np.arange(-3.0, 400.0)[:, None]
+    mean = np.concatenate([np.logspace(-6, 2.5, 60), [1.0, 2.0, 37.5]])[None, :]
+    assert np.array_equal(poisson_pmf(np.maximum(k, 0.0), mean), poisson.pmf(np.maximum(k, 0.0), mean))
+    assert np.array_equal(poisson_cdf(k, mean), poisson.cdf(k, mean))
+    assert np.array_equal(poisson_cdf(k + 0.5, mean), poisson.cdf(k + 0.5, mean))  # floors like scipy

@@ -280,3 +280,26 @@ def test_unknown_model_non_finite_separation_and_non_pad_raise_value_error_namin
         asperity_contact(np.array([0.0, np.nan]), PAD_SOFT)
     with pytest.raises(ValueError, match="pad"):
         asperity_contact(0.0, _GOOD)
+
+
+def test_the_contact_tables_spline_is_scipys_not_a_knot_spline():
+    """The contact table's own spline (so that a solve does not load scipy.interpolate: issue 31)
+    is CubicSpline(x, y, axis=0): equal to round-off on random data and ends (bit for bit with
+    scipy 1.17, measured), exact on cubics (the not-a-knot spline reproduces them) and at the nodes."""
+    from scipy.interpolate import CubicSpline
+
+    from cmpsim.physics.contact import _NotAKnotSpline
+
+    rng = np.random.default_rng(7)
+    for n in (4, 5, 17, 600):
+        x = np.sort(rng.uniform(-3.0, 2.0, n))
+        y = rng.normal(size=(n, 3)) * 1e-6
+        q = np.concatenate([rng.uniform(x[0] - 0.2, x[-1] + 0.2, 400), x])
+        mine, ref = _NotAKnotSpline(x, y)(q), CubicSpline(x, y, axis=0)(q)
+        np.testing.assert_allclose(mine, ref, rtol=1e-12, atol=1e-12 * np.max(np.abs(y)))
+        cubic = np.stack([2.0 - x + 0.5 * x**2 - 0.25 * x**3, 3.0 * x**3], axis=1)
+        exact = np.stack([2.0 - q + 0.5 * q**2 - 0.25 * q**3, 3.0 * q**3], axis=1)
+        np.testing.assert_allclose(_NotAKnotSpline(x, cubic)(q), exact, rtol=1e-9, atol=1e-9)
+        np.testing.assert_allclose(_NotAKnotSpline(x, y)(x), y, rtol=1e-13, atol=1e-13 * np.max(np.abs(y)))
+    with pytest.raises(ValueError, match="strictly increasing"):
+        _NotAKnotSpline(np.array([0.0, 1.0, 1.0, 2.0]), np.zeros((4, 1)))

@@ -185,3 +185,26 @@ def test_every_floor_folder_says_what_lives_there_and_what_it_may_import():
     for room in ("physics", "numerics", "operators", "inputs", "results", "solver", "head"):
         doc = ast.get_docstring(ast.parse((SRC / room / "__init__.py").read_text(encoding="utf-8")))
         assert "May import" in doc, room
+
+
+def test_cmpsim_run_loads_only_the_libraries_it_runs():
+    """Imports where they are used (issue 31): the base case's `cmpsim run` loads numpy, the
+    sparse solvers, scipy.special and rich, not the libraries of other paths."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, io, contextlib\n"
+        "from cmpsim.cli import main\n"
+        "sys.argv = ['cmpsim', 'run']\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    try:\n"
+        "        main()\n"
+        "    except SystemExit as e:\n"
+        "        assert not e.code, e.code\n"
+        "print(' '.join(sorted(sys.modules)))\n"
+    )
+    loaded = set(subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, text=True).stdout.split())
+    assert "cmpsim.solver.equilibrium" in loaded and "scipy.sparse.linalg" in loaded  # it did solve
+    heavy = {"scipy.stats", "scipy.optimize", "scipy.interpolate", "xarray", "matplotlib", "dask", "distributed", "pandas", "pint"}
+    assert not heavy & loaded, sorted(heavy & loaded)

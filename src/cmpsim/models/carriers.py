@@ -15,7 +15,6 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy.interpolate import CubicSpline
 
 from ..physics.geometry import film_thickness
 from ..operators.membrane import BendingError, solve_bending
@@ -43,7 +42,7 @@ RING_TABLE = 128
 
 
 @lru_cache(maxsize=8)
-def ring_table(foundation, radius: float, ring: tuple) -> CubicSpline:
+def ring_table(foundation, radius: float, ring: tuple):
     """The pad's deflection under the retaining ring (m) as a function of the radius under the wafer (m).
 
     ``ring`` = (inner radius, outer radius, pressure) in m, m, Pa; ``foundation`` a laterally
@@ -60,6 +59,8 @@ def ring_table(foundation, radius: float, ring: tuple) -> CubicSpline:
     s = np.linspace(0.0, 1.0, RING_TABLE)
     edge = radius * (1.0 + 1e-9)  # the grid's outermost face points sit on the radius
     table_r = edge * (1.0 - s[::-1] ** 2)
+    from scipy.interpolate import CubicSpline  # the retaining ring's table only (issue 31)
+
     return CubicSpline(table_r, foundation.annulus_deflection(table_r, inner, outer, pressure))
 
 

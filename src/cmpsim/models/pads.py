@@ -16,8 +16,8 @@ one of these (or implements the protocol) and adds an entry to :data:`cmpsim.mod
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import brentq
 
+from ..numerics.roots import brentq
 from ..operators import compliance, compliantfilm, jointnewton, sensitivity
 from ..physics.padstack import LayeredFoundation, PadLayer, WinklerFoundation
 from ..operators.reynolds import FaceCoefficients, ReynoldsSystem, assemble_operator, flux_divergence, lubrication_coefficients

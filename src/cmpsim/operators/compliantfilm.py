@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..numerics.roots import brentq
 from .compliance import _memory, _rigid_film
 from .state import EquilibriumError
 
@@ -19,8 +20,6 @@ __all__ = ["compliant_contact_only_start", "deformed_film"]
 
 def compliant_contact_only_start(problem) -> np.ndarray:
     """h0 at zero tilt for which the pad contact alone carries the load on the compliant pad."""
-    from scipy.optimize import brentq
-
     pad, sigma = problem.pad, problem.sigma
     shape = _rigid_film(problem, np.zeros(3), problem.xc, problem.yc)  # h - h0 at u = 0
     zero_film = problem.contact(np.full(1, 1e-3 * sigma))[0][0]

@@ -47,9 +47,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import poisson
+from scipy.special import gammaln, pdtr, xlogy
 
 __all__ = [
+    "poisson_pmf",
+    "poisson_cdf",
     "AbrasiveContact",
     "AbrasionResult",
     "size_nodes",
@@ -306,6 +308,24 @@ def pad_gap(real_pressure, diameters, counts, pad_pressure):
     return gap[..., 0]
 
 
+
+def poisson_pmf(k, mean):
+    """Poisson probability P(K = k) of a count K with mean ``mean`` (k a whole number >= 0).
+
+    exp(k ln m - ln k! - m), as ``scipy.stats.poisson.pmf`` computes it (equal bit for bit,
+    ``tests/test_abrasion.py``), without loading ``scipy.stats``. Dimensionless.
+    """
+    k = np.asarray(k, dtype=float)
+    return np.clip(np.exp(xlogy(k, mean) - gammaln(k + 1.0) - mean), 0.0, 1.0)
+
+
+def poisson_cdf(k, mean):
+    """Poisson probability P(K <= k) of a count with mean ``mean``: 0 for k < 0, the regularised
+    incomplete gamma function ``pdtr(floor(k), m)`` otherwise, as ``scipy.stats.poisson.cdf``
+    computes it (equal bit for bit). Dimensionless."""
+    k = np.floor(np.asarray(k, dtype=float))
+    return np.where(k >= 0.0, np.clip(pdtr(np.maximum(k, 0.0), mean), 0.0, 1.0), 0.0)
+
 def summit_sharing(mean_count, wrap_count, real_pressure, diameters, counts, pad_pressure, film_groove):
     """Groove section swept per unit real contact area, sum n A_g (m^2 per m^2), with the particles
     counted summit by summit (docs/model.md, 13e.1, step 2b).
@@ -337,7 +357,7 @@ def summit_sharing(mean_count, wrap_count, real_pressure, diameters, counts, pad
     k_floor = np.floor(ks)
     some = M > 0
     m_safe = np.where(some, M, 1.0)
-    out = np.where(some, poisson.cdf(k_floor - 1.0, m_safe), 0.0) * swept_wrap
+    out = np.where(some, poisson_cdf(k_floor - 1.0, m_safe), 0.0) * swept_wrap
     # propped summits: k from floor(k*) + 1 to M + 12 sqrt(M) + 40, beyond which the Poisson mass is
     # below exp(-60) (Chernoff: P(K >= M + t) <= exp(-t^2 / (2 (M + t/3))))
     k_hi = np.where(some, np.ceil(M + 12.0 * np.sqrt(M) + 40.0), 0.0)
@@ -346,7 +366,7 @@ def summit_sharing(mean_count, wrap_count, real_pressure, diameters, counts, pad
     for j0 in range(0, span, _K_CHUNK):
         k = first[..., None] + np.arange(j0, min(j0 + _K_CHUNK, span))  # (points, chunk)
         live = k <= k_hi[..., None]
-        weight = np.where(live, poisson.pmf(k - 1.0, m_safe[:, None]), 0.0)
+        weight = np.where(live, poisson_pmf(k - 1.0, m_safe[:, None]), 0.0)
         if not np.any(weight > 0):
             continue
         idx = np.nonzero(weight > 0)

@@ -342,6 +342,58 @@ def _contact_block(d: np.ndarray, pad: PadSurface, model: str) -> dict:
 
 
 
+class _NotAKnotSpline:
+    """The not-a-knot cubic spline through (x_i, y_i) (columns of ``y`` interpolated together),
+    the spline of ``scipy.interpolate.CubicSpline(x, y, axis=0)`` computed as it computes it.
+
+    Written here because loading ``scipy.interpolate`` (which loads ``scipy.optimize``) cost a
+    fifth of the wall time of ``cmpsim run`` on the base case, for this one table
+    (``benchmarks/bench_import.py``; issue 31). The slopes s_i solve the tridiagonal system of
+    C2 continuity with the not-a-knot ends (third derivative continuous at x_1 and x_{n-2}) by
+    ``scipy.linalg.solve_banded`` (loaded with the sparse solvers anyway); each interval holds
+    the Hermite cubic y_i + s_i t + c1 t^2 + c0 t^3, t = x - x_i, evaluated by powers of t, as
+    scipy's ``PPoly`` does. ``tests/test_contact.py`` checks it against ``CubicSpline`` (equal to
+    round-off; bit for bit with the scipy of this release's tests).
+    """
+
+    def __init__(self, x, y):
+        from scipy.linalg import solve_banded
+
+        x = np.asarray(x, dtype=float)
+        y = np.asarray(y, dtype=float)
+        n = len(x)
+        if n < 4 or y.shape[0] != n or not np.all(np.diff(x) > 0):
+            raise ValueError("_NotAKnotSpline needs >= 4 strictly increasing nodes and one row of y per node")
+        dx = np.diff(x)
+        dxr = dx.reshape((n - 1,) + (1,) * (y.ndim - 1))
+        slope = np.diff(y, axis=0) / dxr
+        band = np.zeros((3, n))
+        rhs = np.empty(y.shape)
+        band[1, 1:-1] = 2 * (dx[:-1] + dx[1:])
+        band[0, 2:] = dx[:-1]
+        band[-1, :-2] = dx[1:]
+        rhs[1:-1] = 3 * (dxr[1:] * slope[:-1] + dxr[:-1] * slope[1:])
+        d = x[2] - x[0]  # not-a-knot at the start
+        band[1, 0], band[0, 1] = dx[1], d
+        rhs[0] = ((dxr[0] + 2 * d) * dxr[1] * slope[0] + dxr[0] ** 2 * slope[1]) / d
+        d = x[-1] - x[-3]  # and at the end
+        band[1, -1], band[-1, -2] = dx[-2], d
+        rhs[-1] = (dxr[-1] ** 2 * slope[-2] + (2 * d + dxr[-1]) * dxr[-2] * slope[-1]) / d
+        s = solve_banded((1, 1), band, rhs.reshape(n, -1), overwrite_ab=True, overwrite_b=True, check_finite=False).reshape(y.shape)
+        t = (s[:-1] + s[1:] - 2 * slope) / dxr
+        self.x = x
+        self.c = np.stack((t / dxr, (slope - s[:-1]) / dxr - t, s[:-1], y[:-1]))
+
+    def __call__(self, xq):
+        """The spline at ``xq`` (1-D), one row per point; the end intervals extend beyond the nodes."""
+        xq = np.asarray(xq, dtype=float)
+        i = np.clip(np.searchsorted(self.x, xq, side="right") - 1, 0, len(self.x) - 2)
+        t = (xq - self.x[i]).reshape((-1,) + (1,) * (self.c.ndim - 2))
+        c0, c1, c2, c3 = self.c[:, i]
+        t2 = t * t
+        return ((0.0 + c3) + c2 * t) + c1 * t2 + c0 * (t2 * t)
+
+
 @lru_cache(maxsize=64)
 def contact_table(pad: PadSurface, model: str = "lep") -> "ContactTable":
     """The :class:`ContactTable` of a pad, built once and cached (pads are immutable)."""
@@ -368,8 +420,6 @@ class ContactTable:
     _POWERS = {"pressure": 2.5, "pressure_elastic": 2.5, "pressure_elastoplastic": 2.5, "pressure_plastic": 2.5}
 
     def __init__(self, pad: PadSurface, model: str = "lep", nodes_per_piece: int = 600, lower: float = -6.0):
-        from scipy.interpolate import CubicSpline
-
         _check_model(model)
         if not np.isfinite(pad.height_cutoff):
             raise ValueError("ContactTable needs a finite height_cutoff; use asperity_contact directly")
@@ -397,7 +447,7 @@ class ContactTable:
             exact = asperity_contact(x, pad, model)
             # one spline through all outputs at once (columns in the order of self._names)
             cols = [getattr(exact, name) / (self._weight(name, x) if last else 1.0) for name in self._names]
-            self._pieces.append((a, b, last, CubicSpline(x, np.stack(cols, axis=1), axis=0)))
+            self._pieces.append((a, b, last, _NotAKnotSpline(x, np.stack(cols, axis=1))))
             mid = 0.5 * (x[1:] + x[:-1])
             ref = asperity_contact(mid, pad, model)
             got = self._evaluate_piece(self._pieces[-1], mid)

@@ -12,8 +12,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
+from ..numerics.roots import brentq
 from ..operators.state import EquilibriumError, EquilibriumSolution
 from .wafer import WaferProblem
 
