@@ -271,7 +271,9 @@ def semi_infinite_rise_convective(heat_flux, film_coefficient, time, conductivit
     h = np.asarray(film_coefficient, dtype=float)
     t = np.asarray(time, dtype=float)
     b = h * np.sqrt(conductivity / (density * heat_capacity) * t) / conductivity
-    return q / h * (1.0 - erfcx(b))
+    sp = math.sqrt(math.pi)
+    series = 2 * b / sp - b**2 + 4 * b**3 / (3 * sp) - b**4 / 2  # 1 - erfcx(b) for small b (no cancellation)
+    return q / h * np.where(b < 1e-3, series, 1.0 - erfcx(np.maximum(b, 1e-3)))
 
 
 def slab_rise(heat_flux, time, thickness, conductivity, density, heat_capacity, terms=200):
@@ -396,12 +398,12 @@ class ThermalColumn:
             return 1.0 / self.eigenvalues
 
     def sinks(self) -> np.ndarray:
-        """Constant part s of the right-hand side (losses to the reference temperatures), W/m^2."""
+        """Constant part s of the right-hand side for the temperature above the slurry's,
+        theta = T - T_slurry (losses to the platen and carrier reference temperatures), W/m^2."""
         s = np.zeros(self.size)
-        s[0] += self.surface_coefficient * self.slurry_temperature
-        s[self.platen_node] += self.platen_coefficient * self.platen_temperature
+        s[self.platen_node] += self.platen_coefficient * (self.platen_temperature - self.slurry_temperature)
         if self.carrier_node >= 0:
-            s[self.carrier_node] += self.carrier_coefficient * self.carrier_temperature
+            s[self.carrier_node] += self.carrier_coefficient * (self.carrier_temperature - self.slurry_temperature)
         return s
 
     def initial_state(self, temperature=None) -> PadThermalState:
@@ -420,7 +422,7 @@ class ThermalColumn:
         rhs = self.sinks() + q[..., None] * self._unit_source()
         flat = rhs.reshape(-1, self.size)
         T = np.linalg.solve(self.stiffness, flat.T).T.reshape(rhs.shape)
-        return PadThermalState(T, 0.0)
+        return PadThermalState(T + self.slurry_temperature, 0.0)
 
     def _unit_source(self) -> np.ndarray:
         g = np.zeros(self.size)
@@ -438,7 +440,8 @@ class ThermalColumn:
         if not (np.isfinite(dt) and dt >= 0):
             raise ValueError(f"time step must be finite and >= 0 s; got {dt!r}")
         q = np.asarray(heat_flux, dtype=float)
-        T0 = np.asarray(state.temperature, dtype=float)
+        Ts = self.slurry_temperature
+        T0 = np.asarray(state.temperature, dtype=float) - Ts  # theta: exact zeros stay zero
         b = self.sinks() + q[..., None] * self._unit_source()
         V, lam = self.eigenvectors, self.eigenvalues
         y0 = (T0 * self.capacity) @ V
@@ -447,7 +450,7 @@ class ThermalColumn:
         decay = np.exp(-x)
         y1 = decay * y0 + dt * _phi1(x) * bb
         T1 = y1 @ V.T
-        new = PadThermalState(T1, state.time + dt)
+        new = PadThermalState(T1 + Ts, state.time + dt)
         if not with_energy:
             return new
         # exact time integral of T over the step: int y = dt phi1 y0 + dt^2 phi2 bb
@@ -455,9 +458,9 @@ class ThermalColumn:
         Tint = yint @ V.T
         supplied = self.duty * q * dt * np.ones(T0.shape[:-1])
         stored = np.sum(self.capacity * (T1 - T0), axis=-1)
-        to_slurry = self.surface_coefficient * (Tint[..., 0] - self.slurry_temperature * dt)
-        to_platen = self.platen_coefficient * (Tint[..., self.platen_node] - self.platen_temperature * dt)
-        to_carrier = (self.carrier_coefficient * (Tint[..., self.carrier_node] - self.carrier_temperature * dt)
+        to_slurry = self.surface_coefficient * Tint[..., 0]
+        to_platen = self.platen_coefficient * (Tint[..., self.platen_node] - (self.platen_temperature - Ts) * dt)
+        to_carrier = (self.carrier_coefficient * (Tint[..., self.carrier_node] - (self.carrier_temperature - Ts) * dt)
                       if self.carrier_node >= 0 else np.zeros_like(stored))
         return new, StepEnergy(supplied, stored, to_slurry, to_platen, to_carrier)
 
