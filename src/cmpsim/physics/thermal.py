@@ -3,8 +3,9 @@
 The frictional power per unit wafer area, q = tau |u_pad - u_wafer| (W/m^2, computed by the caller
 from the solved shear field), is released at the pad-wafer interface. A point of the pad's wafer
 track is under the wafer only a share f of each platen turn (the *duty*, :func:`wafer_duty`), and a
-platen turn (about 0.6 s) is short against the pad's diffusion time (L^2/alpha, about 10-40 s), so
-the pad is described by its track-averaged temperature, a 1-D column across its thickness:
+platen turn (about 0.6 s) is short against the pad's diffusion time, so
+the pad (diffusion time L^2/alpha about 9 s for the 1.27 mm top pad, 37 s with its subpad) is
+described by its track-averaged temperature, a 1-D column across its thickness:
 
     rho c dT/dt = d/dz (k dT/dz)                                   in the pad (and subpad) layers,
     f q = h_s (T(0) - T_slurry) - k dT/dz|0 + f C_w dT(0)/dt (+ f x carrier flux)   at the surface,
@@ -124,7 +125,7 @@ class ThermalConstants:
 
     @property
     def pad_volumetric_heat_capacity(self) -> float:
-        """rho c of the pad with gas-filled pores, (1 - phi) rho_PU c_PU, J/(m^3 K): 9.02e5 (the gas adds 0.05 %)."""
+        """rho c of the pad with gas-filled pores, (1 - phi) rho_PU c_PU, J/(m^3 K): 9.02e5 (the gas in the pores, 0.05 % of it, left out)."""
         return (1 - self.pad_porosity) * self.polyurethane_density * self.polyurethane_heat_capacity
 
     @property
