@@ -12,7 +12,8 @@ it runs in seconds; the command line does the same with `cmpsim die density`, `c
 2. **Oxide: the density die.** Blocks of 10–90 % density polish at K/ρ_eff while their steps
    are high; low-density blocks planarize first.
 3. **Copper: the line die.** After the bulk copper clears, the lines dish (deeper for wider
-   lines, saturating at the pad's contact height from about 5 µm) and dense arrays erode. The
+   lines: the summits reach the pad's contact height from about 5 µm, and beyond it the pad
+   body's elastic bulge into the wide lines adds a few nanometres more up to 100 µm) and dense arrays erode. The
    erosion of the 90 % block is below that of the 70 % one on this die: with a 6.9 mm
    planarization length and 4 mm blocks the pad sees the 90 % block next to the 10 % block of
    the neighbouring die (the die repeats periodically), so its effective density is lower.

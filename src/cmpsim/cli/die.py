@@ -16,13 +16,16 @@ from .inputs import config_options, load_config, parse_assignments
 @click.option("--process", type=click.Choice(["oxide", "copper"]), default="oxide", show_default=True, help="Oxide ILD planarization, or copper damascene (bulk removal, then over-polish: dishing and erosion).")
 @click.option("--param", "params", multiple=True, metavar="NAME=VALUE", help="A die-model input with units, e.g. --param step_height=0.8um (repeatable; see docs/model.md section 18).")
 @click.option("--planarization-length", "pl_text", metavar="L", default=None, help="Override the planarization length derived from the pad stack (e.g. 3mm).")
-@click.option("--weighting", type=click.Choice(["gaussian", "pad"]), default="gaussian", show_default=True, help="Weighting function of the effective density.")
+@click.option("--weighting", type=click.Choice(["gaussian", "pad", "elliptic"]), default="gaussian", show_default=True,
+              help="Weighting function of the effective density: Gaussian, the pad stack's own response, or Ouma's elliptic kernel (the convention of the published planarization lengths); --planarization-length is in its convention.")
+@click.option("--feature-contact", type=click.Choice(["elastic", "summit"]), default="elastic", show_default=True,
+              help="Contact height of a gap: summit sagitta plus the pad body's elastic bulge into it (wide lines keep dishing deeper), or the summit sagitta alone (cmpsim 0.3).")
 @click.option("--cell-size", "cell_text", metavar="SIZE", default=None, help="Cell size of a built-in die (default 50um).")
 @click.option("--blanket-rate", "rate_text", metavar="RATE", default=None, help="Blanket rate of a single die (e.g. 200nm/min); default the wafer-mean rate of the wafer solve.")
 @config_options
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write die.nc, die.png, die.json (and wafer.nc, wafer.png with --wafer) to DIR.")
 @click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
-def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, weighting, cell_text, rate_text, config_path, preset, assignments, grid, out_dir, as_json):
+def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, weighting, feature_contact, cell_text, rate_text, config_path, preset, assignments, grid, out_dir, as_json):
     """Polish a patterned die: effective density, step heights, copper dishing and erosion.
 
     LAYOUT is a layout CSV (density grid, cell size, optional line widths; docs/model.md
@@ -43,7 +46,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     try:
         cfg = load_config(config_path, assignments, preset, grid)
         kwargs = dict(process=process, planarization_length=to_si(pl_text, "m", "--planarization-length", "3 mm") if pl_text else None,
-                      weighting=weighting, cell_size=to_si(cell_text, "m", "--cell-size", "50 um") if cell_text else None,
+                      weighting=weighting, feature_contact=feature_contact, cell_size=to_si(cell_text, "m", "--cell-size", "50 um") if cell_text else None,
                       **parse_assignments(params))
         t = to_si(time_text, "s", "--time", "90 s") if time_text else None
         if wafer:
@@ -77,7 +80,8 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     rows = [[str(r["index"]), f"{100 * r['density']:.0f} %", um(r["line_width"], 1e6, "um"), f"{r['effective_density']:.3f}", um(r["step_height"]), um(r["dishing"]), um(r["erosion"])]
             for r in d["regions"]]
     console.print(_rich_table(f"die {die.layout.name!r} ({die.process.kind}) after {d['time']:.1f} s", ["region", "density", "line width", "eff. density", "step height", "dishing", "erosion"], rows))
-    console.print(f"planarization length {d['planarization_length'] * 1e3:.3g} mm (from the pad stack: {d['planarization_length_from_pad'] * 1e3:.3g} mm); "
+    console.print(f"planarization length {d['planarization_length'] * 1e3:.3g} mm, {d['weighting']} weighting (from the pad stack: "
+                  f"{d['planarization_length_gaussian_from_pad'] * 1e3:.3g} mm Gaussian, {d['planarization_length_elliptic_from_pad'] * 1e3:.3g} mm elliptic); "
                   f"blanket rate {die.blanket_rate * 6e10:.4g} nm/min; time to planarize {um(d['time_to_planarize'], 1, 's')}"
                   + (f"; time to clear {um(d['time_to_clear'], 1, 's')}" if d["time_to_clear"] is not None else ""), highlight=False)
     if wafer:

@@ -15,6 +15,9 @@ Two weighting functions, picked by name (:data:`WEIGHTINGS`), both normalised to
 * ``"pad"``: the pad stack's own normalised response C(q) / C(0) (top pad bending over the
   subpad, :mod:`cmpsim.die.pad`): the weighting the layered pad model implies, with the
   negative side lobes of a bending plate.
+* ``"elliptic"``: Ouma's elliptic weighting (:mod:`cmpsim.die.elliptic`), the deflection of an
+  elastic half-space under a uniform disc of diameter L: the convention in which the published
+  planarization lengths were fitted.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+
+from .elliptic import EllipticWeighting
 
 __all__ = ["GaussianWeighting", "PadWeighting", "WEIGHTINGS", "wave_numbers", "effective_density"]
 
@@ -70,12 +75,15 @@ class PadWeighting:
 
 
 #: The weighting functions by name.
-WEIGHTINGS = {"gaussian": GaussianWeighting, "pad": PadWeighting}
+WEIGHTINGS = {"gaussian": GaussianWeighting, "pad": PadWeighting, "elliptic": EllipticWeighting}
 
 
 def effective_density(density, cell_size: float, weighting) -> np.ndarray:
     """rho_eff = w * rho on the periodic die (FFT); ``density`` (ny, nx) in [0, 1], ``cell_size`` in m."""
     rho = np.asarray(density, dtype=float)
-    q = wave_numbers(rho.shape, cell_size)
-    out = np.fft.irfft2(np.fft.rfft2(rho) * weighting.transfer(q), s=rho.shape)
+    if hasattr(weighting, "grid_transfer"):  # a kernel sampled on the die's cells (elliptic)
+        transfer = weighting.grid_transfer(rho.shape, cell_size)
+    else:
+        transfer = weighting.transfer(wave_numbers(rho.shape, cell_size))
+    out = np.fft.irfft2(np.fft.rfft2(rho) * transfer, s=rho.shape)
     return out

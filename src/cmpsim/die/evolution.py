@@ -17,7 +17,9 @@ top of the field oxide; the film stack (:mod:`cmpsim.die.stacks`) says what they
 
 The contact height of a lower level of width b is the pad's contact height limited by the depth
 a pad summit of radius R can reach into a gap of width b, its sagitta b^2 / 8R:
-h(b) = h_c (1 - exp(-b^2 / (8 R h_c))) (docs/model.md, section 18.5). Everything is exact
+h(b) = h_c (1 - exp(-b^2 / (8 R h_c))) (docs/model.md, section 18.5); with a ``feature``
+(:class:`cmpsim.die.reach.FeatureContact`, the default of :func:`cmpsim.die.simulate`) the pad
+body's elastic bulge into the gap, which grows with the gap's width, is added to it. Everything is exact
 in time within a stage; the stage changes and the planarity events are located by Newton's
 method on the exact trajectory.
 """
@@ -48,7 +50,7 @@ def contact_heights(gap_width, contact_height: float, asperity_radius: float) ->
 class DieEvolution:
     """The state of every cell of a die, advanced in time under blanket rate ``blanket_rate`` (m/s)."""
 
-    def __init__(self, layout, process, effective_density, blanket_rate: float, asperity_radius: float):
+    def __init__(self, layout, process, effective_density, blanket_rate: float, asperity_radius: float, feature=None):
         if not (np.isfinite(blanket_rate) and blanket_rate > 0):
             raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.process = process
@@ -58,6 +60,10 @@ class DieEvolution:
         self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths())
         self.f = np.clip(eff if eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
         self.h = contact_heights(gap, process.contact_height, asperity_radius)
+        if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
+            with np.errstate(divide="ignore", invalid="ignore"):
+                pitch = np.where(layout.density > 0, layout.widths() / layout.density, np.nan)
+            self.h = self.h + feature.bulge(gap, pitch, self.f)
         self.za0, self.zb0 = self.za.copy(), self.zb.copy()
         self.t = 0.0
         s0 = np.abs(self.za - self.zb)

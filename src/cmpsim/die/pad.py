@@ -23,7 +23,7 @@ from scipy.optimize import brentq
 
 from ..physics.padstack import LayeredFoundation, PadLayer, plate_bending_stiffness
 
-__all__ = ["pad_stack", "bending_length", "half_power_wave_number", "planarization_length_from_pad", "GAUSSIAN_HALF_POWER"]
+__all__ = ["pad_stack", "top_layer", "bending_length", "half_power_wave_number", "planarization_length_from_pad", "GAUSSIAN_HALF_POWER"]
 
 #: q_half L of the Gaussian weighting: sqrt(4 pi ln 2).
 GAUSSIAN_HALF_POWER = float(np.sqrt(4.0 * np.pi * np.log(2.0)))
@@ -62,3 +62,8 @@ def half_power_wave_number(stack: LayeredFoundation) -> float:
 def planarization_length_from_pad(config) -> float:
     """Planarization length (m) of the Gaussian weighting implied by the pad stack of ``config``."""
     return GAUSSIAN_HALF_POWER / half_power_wave_number(pad_stack(config))
+
+
+def top_layer(config) -> LayeredFoundation:
+    """The top pad alone, bonded to a rigid base: its C(q) is the pad body at the scale of a line array (:mod:`cmpsim.die.reach`)."""
+    return LayeredFoundation((PadLayer(config.pad_thickness, config.pad_bulk_modulus, config.pad_poisson),))

@@ -22,6 +22,8 @@ from .layout import BUILTIN_LAYOUTS, Layout, builtin_layout, read_layout
 from .pad import pad_stack, planarization_length_from_pad
 from .process import DieProcess
 from .stacks import film_stack
+from .elliptic import DEFAULT_TRUNCATION, EllipticWeighting, planarization_length_elliptic_from_pad
+from .reach import FEATURE_CONTACTS, FeatureContact
 
 __all__ = ["simulate", "simulate_wafer", "DieResult", "WaferDies", "load_layout", "die_sites", "blanket_rates"]
 
@@ -49,6 +51,7 @@ def _config(config):
 
 
 def _weighting(config, planarization_length, weighting):
+    """(weighting, the length derived from the pad in the weighting's own convention)."""
     derived = planarization_length_from_pad(config)
     length = derived if planarization_length is None else float(planarization_length)
     if weighting == "gaussian":
@@ -57,7 +60,22 @@ def _weighting(config, planarization_length, weighting):
         if planarization_length is not None:
             raise ValueError("weighting = 'pad' takes its length from the pad stack: leave planarization_length unset")
         return PadWeighting(pad_stack(config), derived), derived
-    raise ValueError(f"weighting must be 'gaussian' or 'pad'; got {weighting!r}")
+    if weighting == "elliptic":
+        derived = planarization_length_elliptic_from_pad(config)
+        return EllipticWeighting(derived if planarization_length is None else float(planarization_length)), derived
+    raise ValueError(f"weighting must be 'gaussian', 'pad' or 'elliptic'; got {weighting!r}")
+
+
+def _conventions(config) -> dict:
+    """The planarization length derived from the pad stack in each convention (m), and the elliptic kernel's truncation."""
+    return {"gaussian": planarization_length_from_pad(config), "elliptic": planarization_length_elliptic_from_pad(config),
+            "elliptic_truncation": DEFAULT_TRUNCATION}
+
+
+def _feature(config, feature_contact):
+    if feature_contact not in FEATURE_CONTACTS:
+        raise ValueError(f"feature_contact must be one of {', '.join(FEATURE_CONTACTS)}; got {feature_contact!r}")
+    return FeatureContact.from_config(config) if feature_contact == "elastic" else None
 
 
 @dataclass
@@ -73,6 +91,9 @@ class DieResult:
     weighting: str
     effective_density: np.ndarray = field(repr=False)
     evolution: DieEvolution = field(repr=False)
+    #: the length derived from the pad in each convention ("gaussian", "elliptic", m) and "elliptic_truncation" (r_t / a)
+    conventions: dict = field(default_factory=dict, repr=False)
+    feature_contact: str = "summit"
 
     @property
     def time_to_planarize(self) -> float:
@@ -120,6 +141,11 @@ class DieResult:
             "planarization_length": self.planarization_length,
             "planarization_length_from_pad": self.planarization_length_from_pad,
             "weighting": self.weighting,
+            "weighting_definition": WEIGHTING_DEFINITIONS.get(self.weighting, ""),
+            "planarization_length_gaussian_from_pad": self.conventions.get("gaussian"),
+            "planarization_length_elliptic_from_pad": self.conventions.get("elliptic"),
+            "elliptic_truncation": self.conventions.get("elliptic_truncation"),
+            "feature_contact": self.feature_contact,
             "film": self.evolution.stack.film,
             "time_to_planarize": _finite(self.time_to_planarize),
             "time_to_clear": _finite(self.time_to_clear) if ev.stack.metal else None,
@@ -142,7 +168,8 @@ class DieResult:
         coords = {"x": ("x", x, {"units": "m", "long_name": "position on the die", "axis": "X"}),
                   "y": ("y", y, {"units": "m", "long_name": "position on the die", "axis": "Y"})}
         scalars = {"time": self.time, "blanket_rate": self.blanket_rate, "planarization_length": self.planarization_length,
-                   "planarization_length_from_pad": self.planarization_length_from_pad}
+                   "planarization_length_from_pad": self.planarization_length_from_pad,
+                   **{f"planarization_length_{k}_from_pad": self.conventions[k] for k in ("gaussian", "elliptic") if k in self.conventions}}
         ds = _cf_dataset(("y", "x"), maps, MAP_OUTPUTS, scalars, coords, f"cmpsim die: {self.layout.name}, {self.process.kind}")
         ds.attrs["references"] = "Stine et al., IEEE TSM 11, 129 (1998); Ouma et al., IEEE TSM 15, 232 (2002); docs/model.md section 18"
         return ds
@@ -210,7 +237,16 @@ SCALAR_OUTPUTS = {
     "time": ("s", "polishing time"),
     "blanket_rate": ("m s-1", "blanket removal rate of the die"),
     "planarization_length": ("m", "planarization length used"),
-    "planarization_length_from_pad": ("m", "planarization length derived from the pad stack"),
+    "planarization_length_from_pad": ("m", "planarization length derived from the pad stack, in the convention of the weighting used"),
+    "planarization_length_gaussian_from_pad": ("m", "planarization length derived from the pad stack, Gaussian convention (peak and integral of a square window of side L)"),
+    "planarization_length_elliptic_from_pad": ("m", "planarization length derived from the pad stack, Ouma's elliptic convention (L = 2a, the weight at 2/pi of its peak)"),
+}
+#: What L means in each weighting (the JSON's ``weighting_definition``).
+WEIGHTING_DEFINITIONS = {
+    "gaussian": "w(r) = exp(-pi r^2 / L^2) / L^2: the peak and the integral of Stine's square window of side L",
+    "pad": "w = the pad stack's normalised compliance C(q) / C(0); L quoted in the Gaussian convention",
+    "elliptic": "Ouma's elliptic weighting: the deflection of an elastic half-space under a uniform disc of radius a = L / 2 "
+                "(the weight at r = L/2 is 2/pi of its peak), cut at r = elliptic_truncation x a, unit integral",
 }
 #: The per-die outputs of :meth:`WaferDies.dataset`: name -> (SI unit, long name).
 WAFER_OUTPUTS = {
@@ -225,7 +261,7 @@ WAFER_OUTPUTS = {
 }
 
 #: The unit of every key of the JSON of a die run (``"units"`` of :meth:`DieResult.to_dict`).
-_UNITS = {k: unit for table in (MAP_OUTPUTS, SCALAR_OUTPUTS, WAFER_OUTPUTS) for k, (unit, _) in table.items()} | {"pitch": "m", "wafer_diameter": "m"}
+_UNITS = {k: unit for table in (MAP_OUTPUTS, SCALAR_OUTPUTS, WAFER_OUTPUTS) for k, (unit, _) in table.items()} | {"pitch": "m", "wafer_diameter": "m", "elliptic_truncation": "1"}
 
 
 def _end_point(ev: DieEvolution) -> float:
@@ -250,7 +286,7 @@ def _at(ev: DieEvolution, time: float, fresh) -> DieEvolution:
     return new
 
 
-def _prepare(layout, config, process, planarization_length, weighting, cell_size, **process_values):
+def _prepare(layout, config, process, planarization_length, weighting, cell_size, feature_contact="elastic", **process_values):
     config = _config(config)
     layout = load_layout(layout, cell_size)
     if process is None or isinstance(process, str):
@@ -262,11 +298,12 @@ def _prepare(layout, config, process, planarization_length, weighting, cell_size
         config = config.replace(film=film)
     w, derived = _weighting(config, planarization_length, weighting)
     eff = effective_density(layout.density, layout.cell_size, w)
-    return config, layout, process, w, derived, eff
+    return config, layout, process, w, derived, eff, _feature(config, feature_contact)
 
 
 def simulate(layout, time: float | None = None, *, config=None, blanket_rate: float | None = None, process=None,
-             planarization_length: float | None = None, weighting: str = "gaussian", cell_size: float | None = None, **process_values) -> DieResult:
+             planarization_length: float | None = None, weighting: str = "gaussian", cell_size: float | None = None,
+             feature_contact: str = "elastic", **process_values) -> DieResult:
     """Polish one die (docs/model.md, section 18).
 
     Parameters
@@ -285,24 +322,29 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
         The film stack; keywords (``step_height="0.8 um"``, ...) set its inputs with units.
     planarization_length : float, optional
         Override the length (m) derived from the pad stack.
-    weighting : "gaussian" or "pad"
-        The weighting function of the effective density (:mod:`cmpsim.die.density`).
+    weighting : "gaussian", "pad" or "elliptic"
+        The weighting function of the effective density (:mod:`cmpsim.die.density`); the
+        planarization length (given or derived) is in that weighting's convention.
     cell_size : float, optional
         Cell size (m) of a built-in die (default 50 um).
+    feature_contact : "elastic" or "summit"
+        The contact height of a gap: the summit sagitta plus the pad body's elastic bulge into
+        it (default, :mod:`cmpsim.die.reach`), or the summit sagitta alone (cmpsim 0.3).
     """
-    config, layout, process, w, derived, eff = _prepare(layout, config, process, planarization_length, weighting, cell_size, **process_values)
+    config, layout, process, w, derived, eff, fc = _prepare(layout, config, process, planarization_length, weighting, cell_size,
+                                                            feature_contact, **process_values)
     if blanket_rate is None:
         from ..solver.model import solve
 
         blanket_rate = float(solve(config, relative=False).removal_rate_mean)
     if time is not None and not (math.isfinite(time) and time >= 0):
         raise ValueError(f"time must be >= 0 s; got {time!r}")
-    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius)
+    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc)
     t_end = _end_point(ev)  # also gives every cell's event times, reached or not by `time`
     if time is None:
         time = t_end * (1.0 + process.over_polish)
-    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius))
-    return DieResult(layout, process, float(time), float(blanket_rate), w.length, derived, weighting, eff, ev)
+    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc))
+    return DieResult(layout, process, float(time), float(blanket_rate), w.length, derived, weighting, eff, ev, _conventions(config), feature_contact)
 
 
 # ------------------------------------------------------------------------------ the wafer
@@ -399,7 +441,7 @@ class WaferDies:
 
 
 def simulate_wafer(layout, time: float | None = None, *, config=None, result=None, process=None, planarization_length: float | None = None,
-                   weighting: str = "gaussian", cell_size: float | None = None, **process_values) -> WaferDies:
+                   weighting: str = "gaussian", cell_size: float | None = None, feature_contact: str = "elastic", **process_values) -> WaferDies:
     """Polish every die of a wafer (docs/model.md, section 18.7).
 
     One wafer solve (``result``, or ``cmpsim.solve(config)``) gives the blanket rate at each die
@@ -414,8 +456,8 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
         want = film_stack(DieProcess(kind=kind)).film
         if getattr(result.config, "film", want) != want:
             raise ValueError(f"the {kind} process needs the blanket rate of film = {want!r}; the result was solved for film = {result.config.film!r}")
-    config, layout, process, w, derived, eff = _prepare(layout, config if result is None else result.config, process,
-                                                        planarization_length, weighting, cell_size, **process_values)
+    config, layout, process, w, derived, eff, fc = _prepare(layout, config if result is None else result.config, process,
+                                                            planarization_length, weighting, cell_size, feature_contact, **process_values)
     if result is None:
         from ..solver.model import solve
 
@@ -427,13 +469,13 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     k_ref = float(np.max(k))
     if time is not None and not (math.isfinite(time) and time >= 0):
         raise ValueError(f"time must be >= 0 s; got {time!r}")
-    ev = DieEvolution(layout, process, eff, k_ref, config.asperity_radius)
+    ev = DieEvolution(layout, process, eff, k_ref, config.asperity_radius, fc)
     t_end_ref = _end_point(ev)  # the reference (fastest) die's end point, and its event times
     if time is None:
         time = t_end_ref * k_ref / float(np.min(k)) * (1.0 + process.over_polish)
     t_equiv = time * k / k_ref  # each die's time at the reference rate
     order = np.argsort(t_equiv)
-    ev = _at(ev, float(t_equiv[order[0]]), lambda: DieEvolution(layout, process, eff, k_ref, config.asperity_radius))
+    ev = _at(ev, float(t_equiv[order[0]]), lambda: DieEvolution(layout, process, eff, k_ref, config.asperity_radius, fc))
     n = len(x)
     dish, ero, step = np.empty(n), np.empty(n), np.empty(n)
     for i in order:
@@ -442,5 +484,5 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     # event times scale back with the rate; events after the reference die's last time are not known
     tc = ev.t_clear.max() * k_ref / k
     tp = ev.t_planar.max() * k_ref / k
-    die = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev)
+    die = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev, _conventions(config), feature_contact)
     return WaferDies(die, result, float(time), x, y, k, tc, tp, dish, ero, step)
