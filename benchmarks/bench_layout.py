@@ -53,7 +53,7 @@ def exact_densities(lib: gdstk.Library, top: str, layers, window_dbu: int, origi
             if len(sel) == 0:
                 continue
             res = gdstk.boolean([polys[k] for k in sel], gdstk.rectangle((x0, y0), (x0 + w, y0 + w)), "and",
-                                precision=1)
+                                precision=1e-6)
             out[j, i] = sum(p.area() for p in res) / (w * w)
     return out
 
@@ -94,7 +94,7 @@ def klayout_densities(path: Path, layers, window: float, origin, shape, threads:
 
 def step_chip(macro_gds: Path, out: Path, steps: int, pitch=None) -> tuple[float, float, str]:
     """Write a chip that steps the macro's top cell steps x steps; returns the pitch (m) and the macro's name."""
-    lib = gdstk.read_gds(str(macro_gds))
+    lib = gdstk.read_gds(str(macro_gds), unit=1e-6)  # user unit um
     macro = lib.top_level()[0]
     (x0, y0), (x1, y1) = macro.bounding_box()
     px, py = pitch if pitch else (x1 - x0, y1 - y0)

@@ -18,8 +18,8 @@ Each cell is handled once, in one of two ways:
   Green's theorem sees closed outlines).
 
 References rotated by a multiple of 90 degrees (mirrored or not) with magnification 1 are
-used as references; any other reference is flattened into its parent's own shapes (its
-vertices snapped to the database grid, as any flattening does).  All lengths are in
+used as references; any other reference is flattened into its parent's own shapes by
+gdstk (its vertices then lie on the merge's 1e-6 dbu grid, not the file's 1 dbu grid).  All lengths are in
 database units.
 """
 
@@ -37,6 +37,7 @@ __all__ = ["CellRasters"]
 
 IDENTITY = (1, 0, 0, 1)
 _TARGET_PER_TILE = 400  # shapes per boolean call: gdstk.boolean is quadratic in their number
+MERGE_PRECISION = 1e-6  # dbu: where gdstk creates a vertex (oblique edges), it lands on this grid
 
 
 def _orientation(rotation: float, x_reflection: bool, magnification: float):
@@ -117,7 +118,7 @@ def merge_tiled(rings: list, tile: float | None = None) -> list[np.ndarray]:
     nx = max(int(math.ceil((x1 - x0) / tile)), 1)
     ny = max(int(math.ceil((y1 - y0) / tile)), 1)
     if nx * ny == 1:
-        return [p.points for p in gdstk.boolean(rings, [], "or", precision=1)]
+        return [p.points for p in gdstk.boolean(rings, [], "or", precision=MERGE_PRECISION)]
     i0 = np.clip(np.floor((bb[:, 0] - x0) / tile).astype(np.int64), 0, nx - 1)
     i1 = np.clip(np.floor((bb[:, 2] - x0) / tile).astype(np.int64), 0, nx - 1)
     j0 = np.clip(np.floor((bb[:, 1] - y0) / tile).astype(np.int64), 0, ny - 1)
@@ -146,7 +147,7 @@ def merge_tiled(rings: list, tile: float | None = None) -> list[np.ndarray]:
         if tj_ == 0:
             ly = y0 - 1
         clip = gdstk.rectangle((lx, ly), (hx, hy))
-        res = gdstk.boolean([rings[i] for i in sid[group]], clip, "and", precision=1)
+        res = gdstk.boolean([rings[i] for i in sid[group]], clip, "and", precision=MERGE_PRECISION)
         out.extend(p.points for p in res)
     return out
 
@@ -177,7 +178,7 @@ class CellRasters:
     # -- what a cell holds --------------------------------------------------------
     def _own_rings(self, cell: gdstk.Cell) -> list[gdstk.Polygon]:
         """The cell's own shapes on the layers, plus those of references that are not a
-        90-degree placement (flattened by gdstk; the merge snaps them to the dbu grid)."""
+        90-degree placement (flattened by gdstk; the merge puts them on a 1e-6 dbu grid)."""
         out = []
         for layer, dtype in self.layers:
             out.extend(cell.get_polygons(depth=0, layer=layer, datatype=dtype))

@@ -6,10 +6,11 @@ area of the shapes inside a window is the Green's-theorem integral of their outl
 (``-sum of (clamp(y) - y0) dx`` over the edges, counter-clockwise), and the boundary
 length is the length of the outline's segments inside the window.
 
-Coordinates are integers in database units (dbu), held in float64 (exact below 2**53).
-Two outline pieces that run along the same line in opposite directions cancel: the slits
-of a polygon with holes, and the cut between two tiles of one merged shape, are not
-boundary.  A boundary segment that lies exactly on a window edge counts half in each of
+Coordinates are in database units (dbu), float64: integers for the layout's own vertices
+(exact below 2**53), multiples of the merge precision (1e-6 dbu) where gdstk had to
+create a vertex (an oblique edge cut by a tile or crossing another).  Two outline pieces
+that run along the same line in opposite directions cancel: the slits of a polygon with
+holes, and the cut between two tiles of one merged shape, are not boundary.  A boundary segment that lies exactly on a window edge counts half in each of
 the two windows it separates (so that the per-window lengths add up to the total).
 
 All functions here work in dbu; the caller converts to metres.
@@ -78,7 +79,7 @@ def _rings_to_edges(rings: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     if not rings:
         return np.zeros((0, 2)), np.zeros((0, 2))
     lengths = np.array([len(r) for r in rings])
-    p = np.round(np.concatenate(rings).astype(float))
+    p = np.concatenate(rings).astype(float)
     starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
     nxt = np.arange(len(p)) + 1
     nxt[starts + lengths - 1] = starts  # close every ring
@@ -93,60 +94,66 @@ def _rings_to_edges(rings: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     return a[keep], b[keep]
 
 
+def _cancel_axis(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axis-parallel edges: signed multiplicity accumulated along each exact line."""
+    horiz = a[:, 1] == b[:, 1]
+    fam = np.where(horiz, 0, 1)
+    coord = np.where(horiz, a[:, 1], a[:, 0])
+    ta = np.where(horiz, a[:, 0], a[:, 1])
+    tb = np.where(horiz, b[:, 0], b[:, 1])
+    sign = np.where(tb > ta, 1, -1)
+    lo, hi = np.minimum(ta, tb), np.maximum(ta, tb)
+    fam2 = np.concatenate([fam, fam])
+    c2 = np.concatenate([coord, coord])
+    t2 = np.concatenate([lo, hi])
+    d2 = np.concatenate([sign, -sign])
+    order = np.lexsort((t2, c2, fam2))
+    fam2, c2, t2, d2 = fam2[order], c2[order], t2[order], d2[order]
+    net = np.cumsum(d2)  # every line's events sum to zero, so the running sum restarts
+    live = (fam2[:-1] == fam2[1:]) & (c2[:-1] == c2[1:]) & (net[:-1] != 0) & (t2[1:] > t2[:-1])
+    k = np.nonzero(live)[0]
+    mult, f, c, t0, t1 = net[k], fam2[k], c2[k], t2[k], t2[k + 1]
+    back = mult < 0
+    s0, s1 = np.where(back, t1, t0), np.where(back, t0, t1)
+    start = np.where((f == 0)[:, None], np.stack([s0, c], 1), np.stack([c, s0], 1))
+    end = np.where((f == 0)[:, None], np.stack([s1, c], 1), np.stack([c, s1], 1))
+    reps = np.abs(mult)
+    return np.repeat(start, reps, axis=0), np.repeat(end, reps, axis=0)
+
+
+def _cancel_reverse(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Oblique edges: an edge and its exact reverse cancel (the only way two outline
+    pieces of merged, axis-tiled shapes can coincide off the axes)."""
+    swap = (a[:, 0] > b[:, 0]) | ((a[:, 0] == b[:, 0]) & (a[:, 1] > b[:, 1]))
+    lo = np.where(swap[:, None], b, a)
+    hi = np.where(swap[:, None], a, b)
+    key = np.concatenate([lo, hi], axis=1)
+    uniq, inv = np.unique(key, axis=0, return_inverse=True)
+    net = np.rint(np.bincount(inv.reshape(-1), weights=np.where(swap, -1.0, 1.0), minlength=len(uniq))).astype(np.int64)
+    reps = np.abs(net)
+    start = np.where((net < 0)[:, None], uniq[:, 2:], uniq[:, :2])
+    end = np.where((net < 0)[:, None], uniq[:, :2], uniq[:, 2:])
+    return np.repeat(start, reps, axis=0), np.repeat(end, reps, axis=0)
+
+
 def net_segments(rings: list[np.ndarray]) -> Segments:
     """The boundary of a set of merged polygons, with coincident opposite edges cancelled.
 
-    ``rings`` are (k, 2) vertex arrays in dbu (integer-valued; they are rounded).  Edges
-    are grouped by the exact line they lie on (primitive integer direction and offset);
-    along each line the signed multiplicity is accumulated, and the stretches where it is
-    not zero are the boundary.  The result runs counter-clockwise (material on the left);
-    a stretch of multiplicity k (only for overlapping input) is returned k times.
+    ``rings`` are (k, 2) vertex arrays in dbu, the output of :func:`gdstk.boolean`
+    (merged; tiled along axis-parallel cuts; holes joined by axis-parallel slits).  Along
+    every axis-parallel line the signed multiplicity of the edges is accumulated and the
+    stretches where it is not zero are the boundary (slits and tile cuts cancel); an
+    oblique edge cancels against its exact reverse.  The result runs counter-clockwise
+    (material on the left).
     """
     a, b = _rings_to_edges(rings)
     if len(a) == 0:
         return Segments.empty()
-    ai = a.astype(np.int64)
-    bi = b.astype(np.int64)
-    d = bi - ai
-    g = np.gcd(np.abs(d[:, 0]), np.abs(d[:, 1]))
-    u = d // g[:, None]
-    flip = (u[:, 0] < 0) | ((u[:, 0] == 0) & (u[:, 1] < 0))
-    sign = np.where(flip, -1, 1)
-    u = np.where(flip[:, None], -u, u)
-    c = u[:, 0] * ai[:, 1] - u[:, 1] * ai[:, 0]  # offset of the line
-    t1 = u[:, 0] * ai[:, 0] + u[:, 1] * ai[:, 1]
-    t2 = u[:, 0] * bi[:, 0] + u[:, 1] * bi[:, 1]
-    ta, tb = np.minimum(t1, t2), np.maximum(t1, t2)
-    n = len(a)
-    ux = np.concatenate([u[:, 0], u[:, 0]])
-    uy = np.concatenate([u[:, 1], u[:, 1]])
-    cc = np.concatenate([c, c])
-    tt = np.concatenate([ta, tb])
-    dd = np.concatenate([sign, -sign])
-    order = np.lexsort((tt, cc, uy, ux))
-    ux, uy, cc, tt, dd = ux[order], uy[order], cc[order], tt[order], dd[order]
-    net = np.cumsum(dd)  # every line's events sum to zero, so the running sum restarts
-    same = (ux[:-1] == ux[1:]) & (uy[:-1] == uy[1:]) & (cc[:-1] == cc[1:])
-    live = same & (net[:-1] != 0) & (tt[1:] > tt[:-1])
-    k = np.nonzero(live)[0]
-    if len(k) == 0:
-        return Segments.empty()
-    mult = net[k]
-    ux, uy, cc = ux[k].astype(float), uy[k].astype(float), cc[k].astype(float)
-    t0, t1_ = tt[k].astype(float), tt[k + 1].astype(float)
-    norm = ux * ux + uy * uy
-    x0 = (t0 * ux - cc * uy) / norm
-    y0 = (t0 * uy + cc * ux) / norm
-    x1 = (t1_ * ux - cc * uy) / norm
-    y1 = (t1_ * uy + cc * ux) / norm
-    start = np.stack([x0, y0], axis=1)
-    end = np.stack([x1, y1], axis=1)
-    backward = mult < 0
-    sa = np.where(backward[:, None], end, start)
-    sb = np.where(backward[:, None], start, end)
-    reps = np.abs(mult)
-    if np.any(reps > 1):
-        sa, sb = np.repeat(sa, reps, axis=0), np.repeat(sb, reps, axis=0)
+    axis = (a[:, 0] == b[:, 0]) | (a[:, 1] == b[:, 1])
+    sa, sb = _cancel_axis(a[axis], b[axis])
+    if np.any(~axis):
+        oa, ob = _cancel_reverse(a[~axis], b[~axis])
+        sa, sb = np.concatenate([sa, oa]), np.concatenate([sb, ob])
     return Segments(sa, sb)
 
 
