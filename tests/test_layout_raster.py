@@ -61,19 +61,29 @@ def test_orientation_is_an_array_permutation(m):
 
 def test_stepped_block_rastered_once_per_phase():
     """A block stepped 50 x 40 at a pitch that is not a multiple of the window: the block is
-    rastered once per distinct offset against the grid, not once per placement."""
+    rastered once (on the 5 um grid common to its offsets, then summed into windows per
+    offset), not once per placement; the result equals the flattened computation."""
     lib = gdstk.Library(unit=1e-9, precision=1e-9)
     blk = lib.new_cell("BLK")
     for k in range(100):
         blk.add(gdstk.rectangle((k * 200, 0), (k * 200 + 80, 20000), layer=1, datatype=0))
     top = lib.new_cell("TOP")
     top.add(gdstk.Reference(blk, (0, 0), columns=50, rows=40, spacing=(25000, 25000)))
+    top.add(gdstk.Reference(blk, (3000, 1001000), columns=4, rows=1, spacing=(25000, 0)))
     eng = CellRasters(lib, [(1, 0)], 10000, flat_limit=0)
-    area, length, _, _ = eng.raster("TOP")
+    area, length, ix0, iy0 = eng.raster("TOP")
     assert eng.stats["composed_cells"] == 1 and eng.stats["flat_cells"] == 1
-    assert eng.stats["rasters"] == 1 + 4  # the top, and the block at 2 x 2 offsets
+    # the top; the block once on the 5 um grid (4 offsets); the second row at its 2 offsets
+    assert eng.stats["rasters"] == 1 + 1 + 2
     assert eng.stats["zone_windows"] == 0  # 20 um blocks at 25 um pitch never meet
-    assert area.sum() == pytest.approx(50 * 40 * 100 * 80 * 20000)
+    assert area.sum() == pytest.approx(2004 * 100 * 80 * 20000)
+    flat = CellRasters(lib, [(1, 0)], 10000, flat_limit=10**9)
+    fa, fl, fx0, fy0 = flat.raster("TOP")
+    assert (fx0, fy0) == (ix0, iy0)
+    sl = (slice(0, fa.shape[0]), slice(0, fa.shape[1]))
+    np.testing.assert_allclose(area[sl], fa, atol=1e-6)
+    np.testing.assert_allclose(length[sl], fl, atol=1e-9)
+    assert np.abs(area).sum() == pytest.approx(np.abs(fa).sum())
 
 
 def test_klayout_cross_check(tmp_path):

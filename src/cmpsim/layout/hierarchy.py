@@ -152,6 +152,24 @@ def merge_tiled(rings: list, tile: float | None = None) -> list[np.ndarray]:
     return out
 
 
+def _coarsen(area, length, fx0, fy0, step, phase, window):
+    """Window sums of a raster on the grid step * k (phase a multiple of step)."""
+    r = window // step
+    out = []
+    lo = []
+    for axis, (f0, p) in enumerate(((fx0, phase[0] // step), (fy0, phase[1] // step))):
+        n = area.shape[1 - axis]
+        k_lo = (f0 - p) // r
+        k_hi = (f0 + n - 1 - p) // r
+        lo.append((k_lo, k_hi - k_lo + 1, f0 - (p + k_lo * r)))
+    (kx, nkx, offx), (ky, nky, offy) = lo
+    for arr in (area, length):
+        pad = np.zeros((nky * r, nkx * r))
+        pad[offy:offy + arr.shape[0], offx:offx + arr.shape[1]] = arr
+        out.append(pad.reshape(nky, r, nkx, r).sum(axis=(1, 3)))
+    return out[0], out[1], int(kx), int(ky)
+
+
 class CellRasters:
     """Window rasters of the merged shapes of cells of a gdstk library (dbu).
 
@@ -361,6 +379,14 @@ class CellRasters:
             self.stats["rasters"] += 1
         return self._memo[key]
 
+    def _fine(self, name: str, m, step: int):
+        key = ("fine", name, m, step)
+        if key not in self._memo:
+            seg = self._flat_segments(name).oriented(m)
+            self._memo[key] = (*rasterise(seg, (0, 0), step), step)
+            self.stats["rasters"] += 1
+        return self._memo[key]
+
     def _extent(self, box, phase):
         w = self.w
         ix0 = int(math.floor((box[0] - phase[0]) / w)) - 1
@@ -386,8 +412,19 @@ class CellRasters:
             cphase = np.mod(ph - t, w)
             shift = (cphase + t - ph) // w  # child window k is this grid's window k + shift
             groups, inverse = np.unique(cphase, axis=0, return_inverse=True)
+            fine = None
+            if len(groups) > 2 and self.is_flat(inst.child):
+                # several offsets: one raster on the finest grid holding all their lines,
+                # summed into windows per offset (exact: lengths on a fine line are halved
+                # on both sides, and both halves land in the same window)
+                step = math.gcd(w, *(int(v) for v in groups.ravel()))
+                if w // step <= 64:
+                    fine = self._fine(inst.child, mc, step)
             for g, cp in enumerate(groups):
-                ca, cl, cx0, cy0 = self.raster(inst.child, mc, (int(cp[0]), int(cp[1])))
+                if fine is not None:
+                    ca, cl, cx0, cy0 = _coarsen(*fine, (int(cp[0]), int(cp[1])), w)
+                else:
+                    ca, cl, cx0, cy0 = self.raster(inst.child, mc, (int(cp[0]), int(cp[1])))
                 if ca.size == 0:
                     continue
                 sel = shift[inverse.reshape(-1) == g]
