@@ -229,8 +229,12 @@ def test_pdk_name_merges_drawn_and_fill(tmp_path):
     by_name = extract_windows(gds, "met1", 10 * UM, pdk="sky130")
     by_pairs = extract_windows(gds, ["68/20", "36/28"], 10 * UM)
     np.testing.assert_allclose(by_name.density, by_pairs.density, atol=1e-15)
-    only_drawn = extract_windows(gds, "met2", 10 * UM, pdk="sky130") if False else None
-    assert only_drawn is None
+
+
+def test_pdk_name_without_fill_in_the_file(simple_gds):
+    """An unfilled layout has no fill datatype: the name uses the pairs the file has."""
+    res = extract_windows(simple_gds, "met1", 10 * UM, top="TOP", pdk="sky130")
+    assert res.layers == ((68, 20),) and res.density[0, 0] == 1.0
 
 
 def test_layer_map_file(tmp_path):
