@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 
-__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "tune_zones", "polish", "EquilibriumError", "__version__"]
+__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "tune_zones", "polish", "lot", "EquilibriumError", "__version__"]
 
 _LAZY = {
     "Config": ("cmpsim.inputs.config", "Config"),
@@ -33,6 +33,7 @@ _LAZY = {
     "calibrate": ("cmpsim.calibration", "calibrate"),
     "tune_zones": ("cmpsim.head.tuning", "tune_zones"),
     "polish": ("cmpsim.polisher.engine", "polish"),
+    "lot": ("cmpsim.polisher.lot", "run_lot"),
     "die": ("cmpsim.die", None),  # the chip-scale model, a package: cmpsim.die.simulate(...)
 }
 

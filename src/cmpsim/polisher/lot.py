@@ -1,0 +1,340 @@
+"""A lot: the wafers of a recipe in sequence on one pad, under run-to-run control (issue 32).
+
+Each wafer is polished by :func:`cmpsim.polisher.engine.polish` with the pad carried from the
+last one: its temperature (the wafer cools it between wafers, :func:`~cmpsim.polisher.engine.idle`)
+and its life (the summit caps worn flat while polishing and cut back by the conditioning disk,
+:mod:`cmpsim.physics.padlife`: ``conditioning`` "none", "ex_situ" between wafers, or "in_situ"
+during the polish). The glazing enters the removal rate through the pad-life kernel's glazed-area
+factor (eq. L4 of docs/polisher.md; calibrated to Jeong et al. 2024, compared with Lawing 2004);
+the summit constants of the worn pad are reported per wafer.
+
+The incoming thickness of the top film varies from wafer to wafer
+(:func:`cmpsim.polisher.incoming.incoming_profiles`, reproducible with ``seed``), or is given.
+With ``control = "ewma"`` the run-to-run controller (:mod:`cmpsim.polisher.control`) sets each
+wafer's polish time of the recipe's last timed step from its estimated rate and the incoming
+thickness measured before the wafer (feed-forward), and, on a zoned membrane head, its zone
+pressures from the last wafer's post-polish profile through the head's zone response (feedback),
+computed once for the lot at its starting pressures.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..physics.padlife import CONDITIONING, ConditionerDisk, FreshPad, PadLifeState, advance_pad_life, condition_ex_situ, summit_constants
+from .control import ControllerState, EWMAController, feed_forward_time, update_rate, zone_correction
+from .engine import PadState, idle, polish
+from .incoming import incoming_profiles
+from .recipe import RecipeError, load_recipe
+
+__all__ = ["CONTROL", "WaferRecord", "LotResult", "run_lot", "lot_csv", "write_lot"]
+
+#: The run-to-run control of a lot.
+CONTROL = ("none", "ewma")
+
+UNITS = {
+    "polish_time": "s", "removal_rate_mean": "m/s", "final_thickness_mean": "m", "final_thickness_nonuniformity": "1 (std over mean, wafer area)",
+    "zone_pressures": "Pa", "incoming_mean": "m", "pad_temperature_end": "K", "rate_factor": "1 (glazed pad / fresh pad)",
+    "summit_sigma": "1 (worn / fresh)", "target": "m", "idle_time": "s", "wall_time": "s",
+}
+
+
+@dataclass(frozen=True)
+class WaferRecord:
+    """One wafer of a lot (SI). The keys ``index``, ``polish_time`` (s), ``removal_rate_mean`` (m/s),
+    ``final_thickness_mean`` (m), ``final_thickness_nonuniformity`` (fraction) and ``zone_pressures``
+    (Pa) of :meth:`to_dict` are a contract (issue 32); the rest says why."""
+
+    index: int
+    polish_time: float
+    removal_rate_mean: float
+    final_thickness_mean: float
+    final_thickness_nonuniformity: float
+    zone_pressures: tuple
+    incoming_mean: float
+    pad_temperature_end: float | None
+    rate_factor: float
+    summit_sigma: float
+    radius: np.ndarray = field(repr=False)
+    final_thickness: np.ndarray = field(repr=False)
+
+    def to_dict(self) -> dict:
+        return {
+            "index": self.index,
+            "polish_time": self.polish_time,
+            "removal_rate_mean": self.removal_rate_mean,
+            "final_thickness_mean": self.final_thickness_mean,
+            "final_thickness_nonuniformity": self.final_thickness_nonuniformity,
+            "zone_pressures": list(self.zone_pressures),
+            "incoming_mean": self.incoming_mean,
+            "pad_temperature_end": self.pad_temperature_end,
+            "rate_factor": self.rate_factor,
+            "summit_sigma": self.summit_sigma,
+        }
+
+
+@dataclass
+class LotResult:
+    """A polished lot: ``wafers`` (:class:`WaferRecord`), the settings, the ``target`` (m or None),
+    the wafer equilibria solved and the wall time (s)."""
+
+    recipe: object
+    wafers: list
+    control: str
+    conditioning: str
+    seed: int | None
+    target: float | None
+    idle_time: float
+    solves: int
+    wall_time: float
+
+    def to_dict(self) -> dict:
+        """The JSON object of ``cmpsim lot --json`` (SI, units in ``units``)."""
+        return {
+            "recipe": self.recipe.source,
+            "control": self.control,
+            "conditioning": self.conditioning,
+            "seed": self.seed,
+            "target": self.target,
+            "idle_time": self.idle_time,
+            "wafers": [w.to_dict() for w in self.wafers],
+            "solves": self.solves,
+            "wall_time": self.wall_time,
+            "units": dict(UNITS),
+        }
+
+    def to_json(self) -> str:
+        import json
+
+        return json.dumps(self.to_dict())
+
+    def plot(self, path=None):
+        """The lot plot: final thickness (with the target), mean removal rate, polish time and zone
+        pressures against the wafer index; saved to ``path`` if given. Returns the figure."""
+        import matplotlib.pyplot as plt
+
+        idx = [w.index for w in self.wafers]
+        fig, ax = plt.subplots(2, 2, figsize=(10, 6.5), sharex=True)
+        ax[0, 0].plot(idx, [w.final_thickness_mean * 1e9 for w in self.wafers], "o-", label="final mean")
+        if self.target is not None:
+            ax[0, 0].axhline(self.target * 1e9, color="k", ls="--", lw=1, label="target")
+            ax[0, 0].axhspan(self.target * 0.99e9, self.target * 1.01e9, color="0.85", label="target +- 1 %")
+        ax[0, 0].set_ylabel("remaining thickness (nm)")
+        ax[0, 0].legend(fontsize=8)
+        ax[0, 1].plot(idx, [w.removal_rate_mean * 6e10 for w in self.wafers], "o-")
+        ax[0, 1].set_ylabel("mean removal rate (nm/min)")
+        ax[1, 0].plot(idx, [w.polish_time for w in self.wafers], "o-")
+        ax[1, 0].set_ylabel("polish time (s)")
+        zones = np.array([w.zone_pressures for w in self.wafers], dtype=float) / 6894.757293168361
+        for k in range(zones.shape[1] if zones.ndim == 2 else 0):
+            ax[1, 1].plot(idx, zones[:, k], "o-", ms=3, label=f"zone {k + 1}")
+        ax[1, 1].set_ylabel("zone pressure (psi)")
+        if zones.ndim == 2 and zones.shape[1]:
+            ax[1, 1].legend(fontsize=7)
+        for a in ax[1]:
+            a.set_xlabel("wafer")
+        fig.suptitle(f"lot of {len(idx)} wafers: control {self.control}, conditioning {self.conditioning}")
+        fig.tight_layout()
+        if path is not None:
+            fig.savefig(path, dpi=110)
+            plt.close(fig)
+        return fig
+
+
+def _controlled_step(recipe) -> int:
+    timed = [k for k, s in enumerate(recipe.steps) if s.until == "time"]
+    if not timed:
+        raise RecipeError(f"{recipe.source}: a controlled lot needs a timed step (time = ...) whose polish time the controller sets; every step ends at an end point")
+    return timed[-1]
+
+
+def _nonuniformity(thickness, weights) -> float:
+    mean = float(np.sum(weights * thickness))
+    return float(np.sqrt(np.sum(weights * (thickness - mean) ** 2)) / mean) if mean > 0 else math.nan
+
+
+def run_lot(
+    recipe,
+    wafers: int = 25,
+    *,
+    conditioning: str = "in_situ",
+    control: str = "none",
+    seed: int | None = None,
+    overrides: dict | None = None,
+    incoming=None,
+    idle_time: float = 30.0,
+    disk: ConditionerDisk | None = None,
+    pad: FreshPad | None = None,
+    weight: float = 0.3,
+    zone_weight: float = 0.5,
+    time_step: float = 1.0,
+) -> LotResult:
+    """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
+
+    Parameters
+    ----------
+    recipe : Recipe, path or TOML text
+        The recipe (:mod:`cmpsim.polisher.recipe`); with ``control = "ewma"`` it needs a
+        ``[target] remaining`` and a timed step.
+    wafers : int
+        Number of wafers, >= 1.
+    conditioning : "none" | "ex_situ" | "in_situ"
+        The conditioning disk: never, between wafers (for ``idle_time``), or while polishing.
+    control : "none" | "ewma"
+        Without control every wafer runs the recipe as written; with EWMA the controller sets each
+        wafer's polish time and zone pressures.
+    seed : int, optional
+        Seed of the incoming thickness draw (reproducible lots).
+    overrides : dict, optional
+        Inputs for every step unless a step sets them (``--set``).
+    incoming : array (wafers, radii) with radii, optional
+        Given incoming profiles of the top film as ``(radius, thickness)`` (m, m); default drawn.
+    idle_time : float
+        Seconds between two wafers (the pad cools; ex-situ conditioning works then).
+    disk, pad : optional
+        The conditioning disk and the fresh pad of :mod:`cmpsim.physics.padlife` (defaults: its calibration).
+    weight, zone_weight : float
+        The EWMA weights of the rate and of the profile.
+    time_step : float
+        The recipes' time step, s.
+    """
+    t0 = _time.perf_counter()
+    recipe = load_recipe(recipe)
+    if not (isinstance(wafers, (int, np.integer)) and wafers >= 1):
+        raise ValueError(f"wafers must be a whole number >= 1; got {wafers!r}")
+    if conditioning not in CONDITIONING:
+        raise ValueError(f"conditioning must be one of {CONDITIONING}; got {conditioning!r}")
+    if control not in CONTROL:
+        raise ValueError(f"control must be one of {CONTROL}; got {control!r}")
+    if not (math.isfinite(idle_time) and idle_time >= 0):
+        raise ValueError(f"idle_time must be >= 0 s; got {idle_time!r}")
+    target = recipe.target.remaining
+    if control == "ewma" and target is None:
+        raise RecipeError(f"{recipe.source}: control 'ewma' needs the recipe's [target] remaining thickness")
+    overrides = dict(overrides or {})
+    step_k = _controlled_step(recipe) if control == "ewma" else None
+    base = recipe.step_config(recipe.steps[step_k if step_k is not None else 0], overrides)
+
+    # the wafer's radii and the nominal rate: one solve of the (first) controlled step, shared by the controller
+    first = polish(recipe, overrides=overrides, time_step=time_step)
+    solves = first.solves
+    radius = np.asarray(first.initial.radius, dtype=float)
+    weights = np.asarray(first.initial.areas, dtype=float) / float(np.sum(first.initial.areas))  # the wafer-area mean of the stack
+    top = recipe.films[0]
+    if incoming is None:
+        profiles = incoming_profiles(wafers, radius, top.thickness, seed=seed)
+    else:
+        given_r, given_t = incoming
+        given_t = np.atleast_2d(np.asarray(given_t, dtype=float))
+        if given_t.shape[0] < wafers:
+            raise ValueError(f"incoming holds {given_t.shape[0]} profiles for {wafers} wafers")
+        profiles = np.array([np.interp(radius, np.asarray(given_r, dtype=float), t) for t in given_t[:wafers]])
+    others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
+
+    zoned = len(base.zone_radii) > 0
+    start_pressures = tuple(base.zone_pressures) if base.zone_pressures else ((base.applied_pressure,) * len(base.zone_radii) if zoned else ())
+    response = None
+    state = None
+    controller = None
+    if control == "ewma":
+        controller = EWMAController(target=float(target), weight=weight, zone_weight=zone_weight)
+        removed0 = first.initial.mean_thickness(0) - first.final.mean_thickness(0)
+        polish_time0 = sum(s.duration for s in first.steps)
+        state = ControllerState(rate=removed0 / polish_time0, zone_pressures=start_pressures)
+        if zoned:
+            from ..head.zone_response import ZoneSolver, profile_of, response_matrix
+
+            run = ZoneSolver(base)
+            r0 = run(start_pressures)
+            run.adopt(r0)
+            response = response_matrix(run, start_pressures, profile_of(r0)["rate"])
+            solves += run.solves
+
+    sliding_speed = base.rotation_speed * base.centre_distance  # the pad's speed under the wafer centre, m/s
+    life, pad_state, records = PadLifeState(), PadState(), []
+    for k in range(wafers):
+        inc = profiles[k]
+        inc_mean = float(np.sum(weights * inc))
+        wafer_recipe, ov = recipe, dict(overrides)
+        if controller is not None:
+            t = max(feed_forward_time(state, inc_mean, controller.target), time_step)
+            steps = list(recipe.steps)
+            steps[step_k] = replace(steps[step_k], time=t)
+            wafer_recipe = replace(recipe, steps=tuple(steps))
+            if zoned:
+                ov["zone_pressures"] = state.zone_pressures
+        summits = summit_constants(life, pad)
+        factor = float(np.asarray(summits.rate_factor))
+        result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, rate_factor=factor, incoming=(radius, [inc, *others]), time_step=time_step)
+        solves += result.solves
+        total_time = sum(s.duration for s in result.steps)
+        final = np.asarray(result.final.thickness[0], dtype=float)
+        removed = inc_mean - float(np.sum(weights * final))
+        pressures = tuple(ov.get("zone_pressures", start_pressures))
+        records.append(
+            WaferRecord(
+                index=k + 1,
+                polish_time=float(total_time),
+                removal_rate_mean=float(sum(s.removed_volume for s in result.steps) / result.final.wafer_area / total_time) if total_time > 0 else 0.0,
+                final_thickness_mean=float(np.sum(weights * final)),
+                final_thickness_nonuniformity=_nonuniformity(final, weights),
+                zone_pressures=tuple(float(p) for p in pressures),
+                incoming_mean=inc_mean,
+                pad_temperature_end=result.pad_state.surface_temperature,
+                rate_factor=factor,
+                summit_sigma=float(np.asarray(summits.sigma)),
+                radius=radius,
+                final_thickness=final,
+            )
+        )
+        # the pad: worn while polishing (conditioned in situ), then idle: cools, conditioned ex situ
+        life = advance_pad_life(life, base.applied_pressure, sliding_speed, total_time, conditioning, disk, pad)
+        if conditioning == "ex_situ":
+            life = condition_ex_situ(life, idle_time, disk)
+        pad_state = idle(result.pad_state, idle_time, base)
+        if controller is not None:
+            controlled_time = wafer_recipe.steps[step_k].time
+            state = update_rate(state, removed, total_time, controller.weight)
+            if zoned:
+                state = zone_correction(controller, state, radius, final, response, controlled_time)
+    return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves, _time.perf_counter() - t0)
+
+
+def lot_csv(result: LotResult) -> str:
+    """One row per wafer (SI units in the header)."""
+    head = "index,polish_time_s,removal_rate_mean_m_per_s,final_thickness_mean_m,final_thickness_nonuniformity,incoming_mean_m,rate_factor,pad_temperature_end_K,zone_pressures_Pa"
+    rows = [head]
+    for w in result.wafers:
+        zones = " ".join(f"{p:.6g}" for p in w.zone_pressures)
+        temp = "" if w.pad_temperature_end is None else f"{w.pad_temperature_end:.6g}"
+        rows.append(f"{w.index},{w.polish_time:.6g},{w.removal_rate_mean:.6g},{w.final_thickness_mean:.6g},{w.final_thickness_nonuniformity:.6g},{w.incoming_mean:.6g},{w.rate_factor:.6g},{temp},{zones}")
+    return "\n".join(rows) + "\n"
+
+
+def write_lot(result: LotResult, out_dir) -> list:
+    """Write lot.json, lot.csv and lot.png into ``out_dir`` (each atomically, all computed first)."""
+    import io as _io
+    import json
+    from pathlib import Path
+
+    import matplotlib.pyplot as plt
+
+    from ..io import atomic_path, atomic_write_text
+
+    out_dir = Path(out_dir)
+    text, csv_text = json.dumps(result.to_dict(), indent=1), lot_csv(result)
+    fig = result.plot()
+    try:
+        buf = _io.BytesIO()
+        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
+    finally:
+        plt.close(fig)
+    atomic_write_text(out_dir / "lot.json", text)
+    atomic_write_text(out_dir / "lot.csv", csv_text)
+    with atomic_path(out_dir / "lot.png") as tmp:
+        tmp.write_bytes(buf.getvalue())
+    return [out_dir / "lot.json", out_dir / "lot.csv", out_dir / "lot.png"]
