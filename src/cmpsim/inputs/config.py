@@ -179,6 +179,13 @@ PRESETS: dict[str, dict[str, Any]] = {
         "rotation_speed": "93 rpm",
         "wafer_speed_ratio": 87.0 / 93.0,
         "centre_distance": "0.2 m",
+        # the production pad is grooved (issue 32): the common concentric groove, 0.120 in pitch and 0.020 in
+        # wide (0.030 in deep), read in the claims of an Applied Materials patent ("Polishing pad having a
+        # grooved pattern for use in chemical mechanical polishing", claims 2, 4, 6, 7, 13; docs/_sources.md,
+        # section 11). IC1000 is sold K-grooved (Pureon datasheet; McAllister et al. 2019); the K-groove's own
+        # dimensions are not published, so these are the common groove, not a verified K-groove (model 13g).
+        "pad_groove_pitch": "3.05 mm",
+        "pad_groove_width": "0.51 mm",
     },
 }
 
