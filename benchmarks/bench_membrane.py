@@ -4,7 +4,8 @@ Run: python benchmarks/bench_membrane.py [--repeat 3] [--rounds 2] [--layered] [
 (about 3 min on a shared 2-core VM; ``--layered`` adds a 300 mm head on the layered pad, a few
 minutes more for the baseline; ``--preset`` the 300mm preset's equilibrium and tune-zones, with
 ``--baseline 72d45d2`` (the last commit before the preset's tuning finished: its tuning takes
-about 7 min and fails, and is reported as failed).
+about 7 min and fails, and is reported as failed), or a commit before issue 32 to compare the smooth
+preset with the grooved one (the tuning with the ring is then reported as failed).
 
 The baseline's ``src/cmpsim`` is taken from this repository's history (``git archive 0042658``;
 ``--baseline REF`` for another) into a temporary folder that a child process of the same
@@ -57,7 +58,13 @@ LAYERED = {"300mm layered 12x32": ("solve", {**BIG, "pad_compliance": "layer", "
 #: ``--preset``: the 300mm preset (layered IC1000/Suba IV, five zones, ring; default grid 40x64), one
 #: equilibrium and tune-zones from uniform zones. A baseline without the preset, or whose tuning
 #: fails, reports the error in place of a time.
-PRESET = {"300mm preset": ("solve", {"preset": "300mm"}), "300mm preset tune-zones": ("tune", {"preset": "300mm"})}
+#: Since issue 32 the preset's pad is grooved, and ``300mm preset tune-zones --ring`` tunes the ring with the
+#: zones (``tune_zones(ring=True)``; a baseline before issue 32 reports it as an error).
+PRESET = {
+    "300mm preset": ("solve", {"preset": "300mm"}),
+    "300mm preset tune-zones": ("tune", {"preset": "300mm"}),
+    "300mm preset tune-zones --ring": ("tune_ring", {"preset": "300mm"}),
+}
 
 #: What each version's child process runs; prints one line "RESULT {json}".
 CHILD = r"""
@@ -73,15 +80,18 @@ for name, (kind, changes) in cases.items():
     try:
         cfg = (Config.preset(changes.pop("preset")) if "preset" in changes else Config.default()).replace(**changes)
         best = None
-        for _ in range(1 if kind == "tune" else repeat):
+        for _ in range(1 if kind.startswith("tune") else repeat):
             start = time.process_time()
-            out = cmpsim.tune_zones(cfg) if kind == "tune" else cmpsim.solve(cfg, relative=False)
+            if kind == "solve":
+                out = cmpsim.solve(cfg, relative=False)
+            else:
+                out = cmpsim.tune_zones(cfg, ring=True) if kind == "tune_ring" else cmpsim.tune_zones(cfg)
             spent = time.process_time() - start
             best = spent if best is None else min(best, spent)
     except Exception as exc:  # a baseline without this case, or one that fails it
         rows[name] = {"error": f"{type(exc).__name__}: {str(exc)[:120]}", "cpu_s": float("inf"), "solves": 0, "scalars": {}}
         continue
-    if kind == "tune":
+    if kind.startswith("tune"):
         row = {"solves": out.solves, "scalars": {"within_wafer_nonuniformity": out.within_wafer_nonuniformity}}
     else:
         carrier = out.problem.carrier
@@ -140,24 +150,24 @@ def main() -> None:
             old = merge(old, child(old_src, args.repeat, cases))
             new = merge(new, child(REPO / "src", args.repeat, cases))
     print(f"membrane carrier, CPU time, best of {args.repeat} x {args.rounds} rounds (tuning: best of {args.rounds})")
-    print(f"{'case':22s} {args.baseline:>9s} {'now':>9s} {'ratio':>7s}  {'solves':>9s}  {'LU':>9s}  largest scalar difference")
+    print(f"{'case':30s} {args.baseline:>9s} {'now':>9s} {'ratio':>7s}  {'solves':>9s}  {'LU':>9s}  largest scalar difference")
     for name in cases:
         a, b = old[name], new[name]
         if "error" in a or "error" in b:
             said = [f"{who}: {r['error'] if 'error' in r else format(r['cpu_s'], '.3f') + ' s'}" for who, r in ((args.baseline, a), ("now", b))]
-            print(f"{name:22s} " + "; ".join(said))
+            print(f"{name:30s} " + "; ".join(said))
             continue
         diff, which = max_rel_diff(a["scalars"], b["scalars"])
         lu = f"{a['lu']:>4d}>{b['lu']:<4d}" if "lu" in a else " " * 9
         print(
-            f"{name:22s} {a['cpu_s']:8.3f}s {b['cpu_s']:8.3f}s {a['cpu_s'] / b['cpu_s']:6.2f}x  "
+            f"{name:30s} {a['cpu_s']:8.3f}s {b['cpu_s']:8.3f}s {a['cpu_s'] / b['cpu_s']:6.2f}x  "
             f"{a['solves']:>4d}>{b['solves']:<4d}  {lu}  {diff:.1e} ({which})"
         )
     if "300mm tune-zones" in new:
         t = new["300mm tune-zones"]
         print(f"tune-zones 300 mm, five zones: {t['cpu_s']:.2f} s CPU, {t['solves']} solves, non-uniformity "
               f"{t['scalars']['within_wafer_nonuniformity']:.3e} (criterion: <= 60 s)")
-    for name in ("300mm preset", "300mm preset tune-zones"):
+    for name in PRESET:
         if name in new and "error" not in new[name]:
             t = new[name]
             extra = f", {t['solves']} solves, non-uniformity {t['scalars']['within_wafer_nonuniformity']:.3e}" if "tune" in name else ""

@@ -163,3 +163,66 @@ def test_the_command_flattens_an_incoming_profile_and_refuses_one_without_the_ot
     assert r.exit_code != 0 and "--incoming needs --polish-time" in r.output and "Traceback" not in r.output
     r = CliRunner().invoke(main, base + ["--incoming", str(tmp_path / "missing.csv"), "--polish-time", "60 s"])
     assert r.exit_code != 0 and "cannot read" in r.output
+
+
+# ---- the retaining ring tuned with the zones (issue 32: the edge band is the ring's to shape) ----
+RINGED = dict(carrier="membrane", zone_radii="20,38.1 mm", pad_compliance="layer", retaining_ring_pressure="4 psi", grid="coarse")
+
+
+def test_the_ring_is_tuned_with_the_zones_and_reported_with_its_start():
+    """One trust-region step on a 3-inch layered head: the ring pressure is a fourth unknown of the least
+    squares (its response by the same finite differences), kept within its bounds (default 1.5-9 psi)."""
+    from cmpsim.head.tuning import DEFAULT_RING_BOUNDS
+
+    cfg = Config.default().replace(**RINGED)
+    tuned = cmpsim.tune_zones(cfg, ring=True, max_steps=1)
+    assert DEFAULT_RING_BOUNDS == pytest.approx((1.5 * PSI, 9 * PSI))
+    assert tuned.within_wafer_nonuniformity < tuned.before["within_wafer_nonuniformity"]
+    assert tuned.before["ring_pressure"] == pytest.approx(4 * PSI) and tuned.ring_pressure != tuned.before["ring_pressure"]
+    assert 1.5 * PSI <= tuned.ring_pressure <= 9 * PSI
+    assert tuned.config.retaining_ring_pressure == tuned.ring_pressure
+    rings = len(tuned.profile["radius"])
+    assert tuned.response.shape == (rings, 2) and tuned.ring_response.shape == (rings,)
+    data = tuned.to_dict()
+    assert data["ring_pressure"] == tuned.ring_pressure and data["before"]["ring_pressure"] == tuned.before["ring_pressure"]
+    assert data["units"]["ring_pressure"] == "Pa"
+    # the default leaves the ring alone and says nothing of it
+    assert "ring_pressure" not in cmpsim.tune_zones(Config.default().replace(**COARSE), max_steps=1).to_dict()
+
+
+def test_tuning_the_ring_needs_a_ring_to_start_from_and_bounds_around_it():
+    with pytest.raises(ValueError, match=r"ring=True tunes the retaining ring's pressure but the configuration has none"):
+        cmpsim.tune_zones(Config.default().replace(**HEAD), ring=True)
+    with pytest.raises(ValueError, match=r"ring_bounds needs ring=True"):
+        cmpsim.tune_zones(Config.default().replace(**RINGED), ring_bounds=("1 psi", "5 psi"))
+    with pytest.raises(ValueError, match=r"ring_bounds must be 0 < low < high"):
+        cmpsim.tune_zones(Config.default().replace(**RINGED), ring=True, ring_bounds=("5 psi", "1 psi"))
+    with pytest.raises(ValueError, match=r"retaining_ring_pressure .* lies outside the ring bounds"):
+        cmpsim.tune_zones(Config.default().replace(**RINGED), ring=True, ring_bounds=("5 psi", "9 psi"))
+
+
+def test_the_command_frees_the_ring_with_ring_and_its_bounds_with_ring_bounds(monkeypatch):
+    import cmpsim.head.tuning
+
+    seen = {}
+
+    class Stub:
+        def to_dict(self):
+            return {"ring_pressure": 1.0}
+
+    def stub(cfg, **options):
+        seen.update(options)
+        return Stub()
+
+    monkeypatch.setattr(cmpsim.head.tuning, "tune_zones", stub)
+    base = ["tune-zones", "--json", "--grid", "coarse", "--set", "carrier=membrane", "--set", "zone_radii=20,38.1 mm"]
+    r = CliRunner().invoke(main, base)
+    assert r.exit_code == 0, r.output
+    assert seen["ring"] is False and seen["ring_bounds"] is None
+    r = CliRunner().invoke(main, base + ["--ring", "--ring-bounds", "2,6 psi"])
+    assert r.exit_code == 0, r.output
+    assert seen["ring"] is True and seen["ring_bounds"] == pytest.approx([2 * PSI, 6 * PSI])
+    r = CliRunner().invoke(main, base + ["--ring-bounds", "2,6 psi"])
+    assert r.exit_code == 2 and "--ring-bounds needs --ring" in r.output
+    r = CliRunner().invoke(main, base + ["--ring", "--ring-bounds", "2 psi"])
+    assert r.exit_code == 2 and "--ring-bounds takes two pressures" in r.output

@@ -29,9 +29,10 @@ What it shows (the script asserts each statement):
 - **The response width at each boundary** (`tuned.response_widths`, or
   `cmpsim.head.zone_response.zone_response(config)` at given pressures): over how many millimetres the
   rate's answer to a pressure step at a zone boundary falls from 90 % to 10 %.
-- **The production case** is a preset: `cmpsim tune-zones --preset 300mm --json` (a 300 mm wafer,
-  five zones, a retaining ring on the layered pad; about 40 s of CPU per tuning, so not run here;
-  its numbers are in [model, section 13f](../model.md#13f-carrier-rigid-or-membrane-beyond-the-paper)).
+- **The production case** is a preset: `cmpsim tune-zones --preset 300mm --ring --json` (a 300 mm
+  wafer, five zones, a retaining ring on the layered pad with the production pad's concentric
+  grooves; `--ring` tunes the ring's pressure with the zones; about 35 s of CPU per tuning, so not
+  run here; its numbers are in [model, section 13f](../model.md#13f-carrier-rigid-or-membrane-beyond-the-paper)).
 - **The ring tames the edge of the layered pad.** On `pad_compliance = "layer"` the ring's
   pressure pushes the pad away from the wafer's edge and the edge ring's rate falls
   monotonically with it.

@@ -26,18 +26,19 @@ written (the 300mm preset on the default grid):
 
 What it shows (the script asserts each statement):
 
-- **The bulk step leaves copper everywhere** (30 s at 3 psi removes about 195 nm of 1.2 µm).
-- **The landing step does not reach its end point on the 300mm preset.** At 1.5 psi the slurry
-  film carries most of the load on the ungrooved pad: copper is removed at about 33 nm/min, so
+- **The bulk step leaves copper everywhere** (30 s at 3 psi removes about 155 nm of 1.2 µm).
+- **The landing step does not reach its end point on the 300mm preset.** At 1.5 psi copper is
+  removed at about 156 nm/min on the preset's grooved pad (33 nm/min on a smooth pad, whose
+  slurry film carries most of the load), so the 1045 nm the bulk step leaves would take 6.7 min:
   none of it clears in the 240 s allowed and the step ends at its `max_time` (`end = "time"`,
   `endpoint.detected = false`). The issue's criterion (the end point before `max_time`, copper
   cleared on 95 % of the area) is **not met**; the model is not tuned to meet it.
 - **The pad warms at high pressure and cools at low pressure**: the bulk step's frictional
-  power (about 23 kW/m², an effective friction of 0.56 at 1.95 m/s) raises the pad surface by
-  about 43 K in 30 s, far more than the 9.1 K White et al. (2003) measured (see the polisher page);
-  the landing step's 3 kW/m² lets it cool back to about 7 K above the slurry, the barrier step
-  (2 psi) warms it again by about 10 K.
-- **The oxide recipe** removes about 400 nm/min on the 300mm preset, so after its 60 s about 600 nm
+  power (about 18 kW/m², an effective friction of 0.45 at 1.95 m/s) raises the pad surface by
+  about 35 K in 30 s, far more than the 9.1 K White et al. (2003) measured (see the polisher page);
+  the landing step's 10 kW/m² lets it cool back to about 21 K above the slurry, the barrier step
+  (2 psi) warms it again by about 5 K.
+- **The oxide recipe** removes about 323 nm/min on the 300mm preset, so after its 60 s about 677 nm
   of oxide is left against the target of 500 nm (`target.deviation`); the reflectance swings
   through the oxide's thin-film fringes as it thins.
 """
@@ -58,8 +59,8 @@ OUT.mkdir(parents=True, exist_ok=True)
 DATA = Path(cmpsim.__file__).parent / "data"
 NM_MIN = 6e10
 
-# the recipes as written: the 300mm preset on its default grid (the coarse grid's bending does not
-# converge at 1.5 psi), whatever grid the documentation build uses for the other examples
+# the recipes as written: the 300mm preset on its default grid (the coarse grid's bending did not
+# converge at 1.5 psi on the smooth pad), whatever grid the documentation build uses for the other examples
 copper = cmpsim.polish(DATA / "recipe_copper.toml")
 oxide = cmpsim.polish(DATA / "recipe_oxide.toml")
 for res in (copper, oxide):

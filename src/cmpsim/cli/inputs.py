@@ -40,7 +40,7 @@ def config_options(command):
     for option in reversed(
         [
             click.option("--config", "config_path", type=click.Path(dir_okay=False), help="TOML file of inputs: sections [wafer] [process] [slurry] [pad] [numerics] or flat keys, values with units or SI (e.g. from `cmpsim calibrate`)."),
-            click.option("--preset", type=click.Choice(PRESET_NAMES), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model; '300mm' a 300 mm wafer in a five-zone membrane head with a retaining ring on IC1000/Suba IV, a production oxide recipe (docs/model.md)."),
+            click.option("--preset", type=click.Choice(PRESET_NAMES), default=None, help="Start from a named preset: 'paper' is the paper's model exactly; 'default' the predictive model; '300mm' a 300 mm wafer in a five-zone membrane head with a retaining ring on concentrically grooved IC1000/Suba IV, a production oxide recipe (docs/model.md)."),
             click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input, with units: --set applied_pressure=3psi (repeatable)."),
             click.option("--grid", default=None, metavar="GRID", help="Grid: coarse, default, fine or NRxNT (rings x sectors); default: the configuration's."),
         ]

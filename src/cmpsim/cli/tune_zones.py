@@ -14,14 +14,17 @@ from .inputs import config_options, load_config
 @click.option("--keep", type=click.Choice(["pressure", "rate"]), default=None, help="Also keep the mean pressure (the load) or the mean removal rate of the start.")
 @click.option("--incoming", "incoming", type=click.Path(dir_okay=False), default=None, metavar="FILE.csv", help="Incoming thickness profile to flatten after --polish-time: CSV with header radius_<unit>,thickness_<unit> (e.g. radius_mm,thickness_nm).")
 @click.option("--polish-time", "polish_time", default=None, metavar="TIME", help="Polish time with units (e.g. '60 s', '1.5 min'); required with --incoming.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before; with --incoming also remaining_thickness (radius, thickness; m) and remaining_nonuniformity (fraction).")
-def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, incoming, polish_time, as_json):
+@click.option("--ring", "ring", is_flag=True, help="Also tune the retaining ring's pressure (retaining_ring_pressure is the start; the layered pad): the edge band is the ring's to shape, not a zone's.")
+@click.option("--ring-bounds", "ring_bounds", default=None, metavar="LOW,HIGH UNIT", help="Bounds of the ring pressure with --ring [default: 1.5,9 psi].")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before; with --ring also ring_pressure (Pa); with --incoming also remaining_thickness (radius, thickness; m) and remaining_nonuniformity (fraction).")
+def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, incoming, polish_time, ring, ring_bounds, as_json):
     """Find the zone pressures of a membrane head that flatten the removal profile.
 
     Starts from the configuration's zone_pressures (or applied_pressure in every zone);
     needs --set carrier=membrane and zone_radii. Prints the pressures, the profile before
     and after, and the within-wafer non-uniformity. With --incoming FILE.csv and
-    --polish-time, flattens the thickness left after polishing instead.
+    --polish-time, flattens the thickness left after polishing instead. With --ring, the
+    retaining ring's pressure is tuned with the zones.
     """
     import json
 
@@ -38,7 +41,14 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
             raise ValueError("--incoming needs --polish-time (e.g. --polish-time '60 s')")
         if polish_time is not None and incoming is None:
             raise ValueError("--polish-time needs --incoming FILE.csv (the incoming thickness profile)")
-        result = tune_zones(cfg, bounds=limits, keep=keep, incoming=incoming, polish_time=polish_time)
+        ring_limits = None
+        if ring_bounds is not None:
+            if not ring:
+                raise ValueError("--ring-bounds needs --ring (the retaining ring's pressure tuned with the zones)")
+            ring_limits = parse_list(ring_bounds, "Pa", "--ring-bounds", example="psi")
+            if len(ring_limits) != 2:
+                raise ValueError(f"--ring-bounds takes two pressures, LOW,HIGH with one unit (e.g. '1.5,9 psi'); got {ring_bounds!r}")
+        result = tune_zones(cfg, bounds=limits, keep=keep, incoming=incoming, polish_time=polish_time, ring=ring, ring_bounds=ring_limits)
     except EquilibriumError as exc:
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
@@ -54,6 +64,8 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
     from rich.console import Console
 
     console = Console()
+    if result.ring_pressure is not None:
+        rows.append(("ring", f"{result.before['ring_pressure'] / psi:.3f}", f"{result.ring_pressure / psi:.3f}"))
     console.print(_rich_table("zone pressures", ["zone outer radius (mm)", "before (psi)", "tuned (psi)"], rows))
     nm_min = 1e9 * 60.0
     prof = [

@@ -7,7 +7,9 @@ within-wafer non-uniformity times the mean:
 
     minimise  sum_i a_i (RR_i(P) - m)^2     over P (and the level m),   P_lo <= P_k <= P_hi,
 
-optionally keeping the mean pressure (the load) or the mean rate of the start. Given an incoming
+optionally keeping the mean pressure (the load) or the mean rate of the start, and optionally
+tuning the retaining ring's pressure with the zones (``ring=True``: the edge band is the ring's to
+shape, not a zone's; the ring presses the pad beside the wafer). Given an incoming
 thickness profile t_in(r) and a polish time T, the flattened quantity is instead the remaining
 thickness t_in(r) - RR(r) T (:func:`read_incoming` reads the profile from a CSV file). Each step is a
 Gauss-Newton step on the zone response J_ik = d RR_i / d P_k, measured by finite differences of
@@ -38,13 +40,16 @@ from ..inputs.config import Config
 from ..operators.state import EquilibriumError
 from ..results.uniformity import ring_areas_inside, weighted_std_over_mean
 from ..inputs.units import to_si
-from .zone_response import RESPONSE_STEP, ZoneSolver, boundary_widths, inside_share, profile_of, response_matrix
+from .zone_response import RESPONSE_STEP, ZoneSolver, boundary_widths, inside_share, profile_of, response_matrix, ring_response
 
-__all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "KEEP", "LENGTH_UNITS"]
+__all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "DEFAULT_RING_BOUNDS", "KEEP", "LENGTH_UNITS"]
 
 PSI = 6894.757293168361
 #: Default bounds of the zone pressures, Pa (0.5-8 psi, issue 25).
 DEFAULT_BOUNDS = (0.5 * PSI, 8.0 * PSI)
+#: Default bounds of the retaining ring's pressure when it is tuned (``ring=True``), Pa: 1.5-9 psi, the
+#: range of a ring chamber's pressure in US 6,309,290 B1 [V-2] (docs/model.md 13f, the 300mm preset's table).
+DEFAULT_RING_BOUNDS = (1.5 * PSI, 9.0 * PSI)
 #: The first step's trust region, a fraction of the largest start pressure: no zone moves further.
 TRUST_START = 0.25
 #: Shrinks of the trust region in a step whose trial does not flatten the profile, before the tuning stops.
@@ -127,7 +132,10 @@ class ZoneTuning:
     and ``remaining_nonuniformity`` (fraction) of the tuned pressures, and the same in ``before``;
     ``within_wafer_nonuniformity`` stays that of the removal profile; ``history`` holds
     (pressures, objective) of each accepted step, the objective being the remaining thickness's
-    non-uniformity then.
+    non-uniformity then. With the ring tuned (``ring=True``): ``ring_pressure`` the tuned ring
+    pressure (Pa; ``before["ring_pressure"]`` the start's) and ``ring_response`` the last response
+    of the profile to it, d RR_i / d P_ring (m/s/Pa); both None otherwise, and ``config`` carries
+    the tuned ring pressure.
     """
 
     zone_radii: tuple
@@ -143,6 +151,8 @@ class ZoneTuning:
     polish_time: float | None = None
     remaining_thickness: dict | None = None
     remaining_nonuniformity: float | None = None
+    ring_pressure: float | None = None
+    ring_response: np.ndarray | None = None
 
     @property
     def response_inside(self) -> tuple:
@@ -180,6 +190,10 @@ class ZoneTuning:
             out["before"]["remaining_thickness"] = {k: list(map(float, v)) for k, v in self.before["remaining_thickness"].items()}
             out["before"]["remaining_nonuniformity"] = self.before["remaining_nonuniformity"]
             out["units"].update(polish_time="s", thickness="m", remaining_nonuniformity="1")
+        if self.ring_pressure is not None:
+            out["ring_pressure"] = self.ring_pressure
+            out["before"]["ring_pressure"] = self.before["ring_pressure"]
+            out["units"]["ring_pressure"] = "Pa"
         return out
 
 
@@ -230,6 +244,8 @@ def tune_zones(
     rtol: float = 1e-3,
     incoming=None,
     polish_time=None,
+    ring: bool = False,
+    ring_bounds=None,
 ) -> ZoneTuning:
     """Zone pressures of a membrane head that flatten its removal-rate profile, or the film left after polishing.
 
@@ -252,6 +268,13 @@ def tune_zones(
         linearly onto the profile radii) instead of the rate; ``keep = "rate"`` keeps the mean rate.
     polish_time : float (s) or text with units
         The polish time; required with ``incoming``, refused without it.
+    ring : bool
+        Also tune the retaining ring's pressure (``retaining_ring_pressure``, its start; > 0, on the
+        layered pad), within ``ring_bounds``: the ring shapes the edge band, which the zones cannot.
+        Default False: the ring pressure stays the configuration's (the tuning of before).
+    ring_bounds : (low, high), optional
+        Bounds of the ring pressure, Pa or text with units (default :data:`DEFAULT_RING_BOUNDS`,
+        1.5-9 psi); only with ``ring=True``.
 
     Returns
     -------
@@ -260,7 +283,8 @@ def tune_zones(
     Raises
     ------
     ValueError
-        Not a membrane head, or bad bounds (naming them); the start outside the bounds; a bad
+        Not a membrane head, or bad bounds (naming them); the start outside the bounds; ``ring``
+        without a ring pressure to start from, or ``ring_bounds`` without ``ring``; a bad
         incoming profile (naming the file, row or column), one that does not cover the rings inside
         the edge exclusion, or a polish time that removes more than the incoming film anywhere
         inside the edge exclusion at the start or the tuned pressures.
@@ -274,6 +298,20 @@ def tune_zones(
     lo, hi = (to_si(b, "Pa", "bounds", example="psi") for b in bounds)
     if not (0 < lo < hi):
         raise ValueError(f"bounds must be 0 < low < high (Pa); got ({lo:g}, {hi:g}) Pa")
+    if ring_bounds is not None and not ring:
+        raise ValueError("ring_bounds needs ring=True (the retaining ring's pressure tuned with the zones)")
+    if ring:
+        ring_lo, ring_hi = (to_si(b, "Pa", "ring_bounds", example="psi") for b in (DEFAULT_RING_BOUNDS if ring_bounds is None else ring_bounds))
+        if not (0 < ring_lo < ring_hi):
+            raise ValueError(f"ring_bounds must be 0 < low < high (Pa); got ({ring_lo:g}, {ring_hi:g}) Pa")
+        ring_start = float(config.retaining_ring_pressure)
+        if ring_start == 0.0:
+            raise ValueError(
+                "ring=True tunes the retaining ring's pressure but the configuration has none (retaining_ring_pressure = 0): "
+                "set a start, e.g. retaining_ring_pressure = '3 psi' (on pad_compliance = 'layer')"
+            )
+        if not (ring_lo <= ring_start <= ring_hi):
+            raise ValueError(f"the start's retaining_ring_pressure {ring_start:g} Pa lies outside the ring bounds [{ring_lo:g}, {ring_hi:g}] Pa")
     if (incoming is None) != (polish_time is None):
         raise ValueError("incoming and polish_time go together: give both (the incoming thickness profile and the polish time) or neither")
     if incoming is not None:
@@ -290,8 +328,18 @@ def tune_zones(
     start = np.array(config.zone_pressure_values, dtype=float)
     if np.any(start < lo) or np.any(start > hi):
         raise ValueError(f"the start's zone pressures {', '.join(f'{p:g}' for p in start)} Pa lie outside the bounds [{lo:g}, {hi:g}] Pa")
+    n = start.size  # the zones; with the ring tuned, the variables are the zone pressures and the ring's, Pa
+    if ring:
+        start_x = np.append(start, ring_start)
+        x_lo, x_hi = np.append(np.full(n, lo), ring_lo), np.append(np.full(n, hi), ring_hi)
+    else:
+        start_x, x_lo, x_hi = start.copy(), np.full(n, lo), np.full(n, hi)
     run = ZoneSolver(config)
-    base = run(start)
+
+    def solve_at(x):
+        return run(x[:n], ring=x[n] if ring else None)
+
+    base = solve_at(start_x)
     run.adopt(base)
     weights = _weights(base)
     areas = np.diff(np.concatenate([[0.0], radii]) ** 2)  # zone areas / pi
@@ -314,24 +362,29 @@ def tune_zones(
     def nonuniformity(result) -> float:
         return nonuniformity_of(quantity(result))
 
-    current, pressures = base, start.copy()
+    current, x = base, start_x.copy()
     wiwnu = nonuniformity(base)
-    history = [(tuple(pressures), wiwnu)]
-    response = np.zeros((weights.size, start.size))
-    delta = TRUST_START * float(np.max(start))  # the trust region: no zone moves by more than this in a step, Pa
+    history = [(tuple(x[:n]), wiwnu)]
+    response = np.zeros((weights.size, start_x.size))
+    delta = TRUST_START * float(np.max(start_x))  # the trust region: no pressure moves by more than this in a step, Pa
     for _ in range(max_steps):
         rate = profile_of(current)["rate"]
         q = quantity(current)
-        response = response_matrix(run, pressures, rate, high=hi, step=RESPONSE_STEP)  # warm-started from the current solve
+        ring_now = x[n] if ring else None
+        response = response_matrix(run, x[:n], rate, high=hi, step=RESPONSE_STEP, ring=ring_now)  # warm-started from the current solve
+        if ring:
+            response = np.hstack([response, ring_response(run, x[:n], ring_now, rate, high=ring_hi, step=RESPONSE_STEP)[:, None]])
         # least squares in (dP, m): sqrt(a_i) (q_i + s J dP - m) -> 0, relative to the mean of q
         w = np.sqrt(weights / weights.sum()) / abs(target)
         A = np.hstack([w[:, None] * (scale * response), -w[:, None]])
         b = -w * q
-        lower = np.concatenate([lo - pressures, [-np.inf]])
-        upper = np.concatenate([hi - pressures, [np.inf]])
+        lower = np.concatenate([x_lo - x, [-np.inf]])
+        upper = np.concatenate([x_hi - x, [np.inf]])
         rows, rhs = [A], [b]
-        if keep == "pressure":  # sum A_k dP_k = 0, weighted to dominate
-            rows.append(1e3 * np.concatenate([areas / areas.sum(), [0.0]])[None, :] / PSI)
+        if keep == "pressure":  # sum A_k dP_k = 0 over the zones (the ring's load is not the wafer's), weighted to dominate
+            load_row = np.zeros(start_x.size + 1)
+            load_row[:n] = areas / areas.sum()
+            rows.append(1e3 * load_row[None, :] / PSI)
             rhs.append([0.0])
         elif keep == "rate":  # the level m is the start's mean of q (of the rate, or t_in - rate T)
             lower[-1], upper[-1] = target - 1e-12 * abs(target), target + 1e-12 * abs(target)
@@ -341,43 +394,50 @@ def tune_zones(
             box_lo = np.concatenate([np.maximum(lower[:-1], -delta), lower[-1:]])
             box_hi = np.concatenate([np.minimum(upper[:-1], delta), upper[-1:]])
             step = lsq_linear(A_all, b_all, bounds=(box_lo, box_hi)).x[:-1]
-            trial = np.clip(pressures + step, lo, hi)
-            if np.max(np.abs(trial - pressures)) <= 1e-9 * float(np.max(pressures)):
+            trial = np.clip(x + step, x_lo, x_hi)
+            if np.max(np.abs(trial - x)) <= 1e-9 * float(np.max(x)):
                 break  # the linear model asks for no change: a (bounded) least-squares minimum
-            predicted = nonuniformity_of(q + scale * response @ (trial - pressures))
+            predicted = nonuniformity_of(q + scale * response @ (trial - x))
             try:
-                result = run(trial)
+                result = solve_at(trial)
             except EquilibriumError:  # a step too far for the solver counts as one that does not flatten
-                delta = 0.5 * np.max(np.abs(trial - pressures))
+                delta = 0.5 * np.max(np.abs(trial - x))
                 continue
             value = nonuniformity(result)
             if value < wiwnu:
                 accepted = True
                 break
-            delta = 0.5 * np.max(np.abs(trial - pressures))
+            delta = 0.5 * np.max(np.abs(trial - x))
         if not accepted:
             break
         # the trust radius follows how well the linear model predicted the gain (Nocedal & Wright 2006, alg. 4.1)
         agreement = (wiwnu - value) / max(wiwnu - predicted, 1e-300)
-        moved = np.max(np.abs(trial - pressures))
+        moved = np.max(np.abs(trial - x))
         if agreement < 0.25:
             delta = 0.5 * moved
         elif agreement > 0.75 and moved > 0.99 * delta:
             delta = 2.0 * delta
         gain = (wiwnu - value) / wiwnu
-        current, pressures, wiwnu = result, trial, value
+        current, x, wiwnu = result, trial, value
         run.adopt(result)
-        history.append((tuple(pressures), wiwnu))
+        history.append((tuple(x[:n]), wiwnu))
         if gain < rtol:
             break
-    final_cfg = config.replace(zone_pressures=tuple(float(p) for p in pressures))
+    pressures = x[:n]
+    tuned = {"zone_pressures": tuple(float(p) for p in pressures)}
+    if ring:
+        tuned["retaining_ring_pressure"] = float(x[n])
+    final_cfg = config.replace(**tuned)
     before = {"zone_pressures": tuple(start), "within_wafer_nonuniformity": weighted_std_over_mean(profile_of(base)["rate"], weights), "profile": profile_of(base)}
     extra = {}
+    if ring:
+        before["ring_pressure"] = ring_start
+        extra.update(ring_pressure=float(x[n]), ring_response=response[:, n])
     if incoming is not None:
         remaining = _remaining(current, offset, polish_time)
         _check_not_through(remaining, current, polish_time, "at the tuned pressures")
         radius = profile_of(current)["radius"]
-        extra = dict(polish_time=polish_time, remaining_thickness={"radius": radius, "thickness": remaining}, remaining_nonuniformity=wiwnu)
+        extra.update(polish_time=polish_time, remaining_thickness={"radius": radius, "thickness": remaining}, remaining_nonuniformity=wiwnu)
         before.update(remaining_thickness={"radius": radius, "thickness": _remaining(base, offset, polish_time)}, remaining_nonuniformity=history[0][1])
         wiwnu = weighted_std_over_mean(profile_of(current)["rate"], weights)
     return ZoneTuning(
@@ -386,7 +446,7 @@ def tune_zones(
         within_wafer_nonuniformity=wiwnu,
         profile=profile_of(current),
         before=before,
-        response=response,
+        response=response[:, :n],
         config=final_cfg,
         solves=run.solves,
         ring_faces=np.asarray(base.grid.ring_faces, dtype=float),

@@ -50,6 +50,7 @@ __all__ = [
     "BoundaryWidth",
     "zone_response",
     "response_matrix",
+    "ring_response",
     "profile_of",
     "inside_share",
     "local_gains",
@@ -76,9 +77,15 @@ class ZoneSolver:
         self.config, self.solves = config, 0
         self.start, self.bending = None, None
 
-    def __call__(self, pressures):
-        """The solve at these zone pressures (Pa), warm-started from the adopted equilibrium and bending."""
-        cfg = self.config.replace(zone_pressures=tuple(float(p) for p in pressures))
+    def __call__(self, pressures, ring=None):
+        """The solve at these zone pressures (Pa), warm-started from the adopted equilibrium and bending.
+
+        ``ring``: the retaining ring's pressure (Pa) for this solve; None keeps the configuration's.
+        """
+        changes = {"zone_pressures": tuple(float(p) for p in pressures)}
+        if ring is not None:
+            changes["retaining_ring_pressure"] = float(ring)
+        cfg = self.config.replace(**changes)
         problem = build_problem(cfg)
         problem.carrier.initial_bending = self.bending
         r = solve(cfg, start=self.start, relative=False, problem=problem)
@@ -90,11 +97,12 @@ class ZoneSolver:
         self.start, self.bending = result.solution.state.u, result.problem.carrier.bending[1]
 
 
-def response_matrix(run: ZoneSolver, pressures, rate, high: float = np.inf, step: float = RESPONSE_STEP) -> np.ndarray:
+def response_matrix(run: ZoneSolver, pressures, rate, high: float = np.inf, step: float = RESPONSE_STEP, ring=None) -> np.ndarray:
     """J_ik = d RR_i / d P_k (m/s/Pa) by one-sided differences of ``run`` at ``pressures`` (Pa).
 
     ``rate`` is the profile (m/s) at ``pressures``; each zone is raised by ``step`` times its
-    pressure, or lowered by it where raising would pass ``high``.
+    pressure, or lowered by it where raising would pass ``high``. ``ring``: the retaining ring's
+    pressure (Pa) of every solve, None for the configuration's.
     """
     pressures = np.asarray(pressures, dtype=float)
     rate = np.asarray(rate, dtype=float)
@@ -103,8 +111,26 @@ def response_matrix(run: ZoneSolver, pressures, rate, high: float = np.inf, step
         dp = step * pressures[k]
         trial = pressures.copy()
         trial[k] += dp if trial[k] + dp <= high else -dp
-        out[:, k] = (profile_of(run(trial))["rate"] - rate) / (trial[k] - pressures[k])
+        out[:, k] = (profile_of(run(trial, ring=ring))["rate"] - rate) / (trial[k] - pressures[k])
     return out
+
+
+def ring_response(run: ZoneSolver, pressures, ring: float, rate, high: float = np.inf, step: float = RESPONSE_STEP) -> np.ndarray:
+    """d RR_i / d P_ring (m/s/Pa), the removal profile's response to the retaining ring's pressure.
+
+    One-sided difference of ``run`` at the zone ``pressures`` (Pa) and ring pressure ``ring``
+    (Pa, > 0), whose profile is ``rate`` (m/s): the ring is raised by ``step`` times its pressure,
+    or lowered by it where raising would pass ``high``. The ring presses the pad beside the wafer
+    (``retaining_ring_*``; a laterally coupled pad carries it to the wafer's edge), so its response
+    lies in the edge band.
+    """
+    ring = float(ring)
+    if not ring > 0:
+        raise ValueError(f"the ring's response needs a ring pressure > 0 Pa; got {ring:g} Pa")
+    rate = np.asarray(rate, dtype=float)
+    dp = step * ring
+    trial = ring + dp if ring + dp <= high else ring - dp
+    return (profile_of(run(pressures, ring=trial))["rate"] - rate) / (trial - ring)
 
 
 def _zone_masks(radius, zone_radii) -> list:

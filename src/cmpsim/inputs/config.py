@@ -126,8 +126,8 @@ PARAMETERS: dict[str, Param] = {
         _P("subpad_modulus", "pad", "E_2s", "Pa", "MPa", 2.3e6, "Young's modulus of the subpad", "Order of magnitude of a Suba IV-class felt: 2.29 MPa soft-pad layer of Wang et al., JES 144, 1121 (1997), as used by Lo & Lin, J. Mater. Process. Technol. 168, 250 (2005) (second-hand); see docs/model.md", 0.0),
         _P("subpad_poisson", "pad", "nu_2s", "", "", 0.1, "Poisson ratio of the subpad", "Wang et al. (1997) via Lo & Lin (2005) (second-hand): 0.1 for the soft pad layer", 0.0, 0.5, False, True),
         # grooves of the pad (docs/model.md, 13g "Grooved pad: venting of the film")
-        _P("pad_groove_pitch", "pad", "lambda_g", "m", "mm", 0.0, "Pitch of the pad's concentric grooves (0 = ungrooved): grooves at ambient pressure vent the slurry film over each land", "0 = the smooth pad of the paper; concentric grooves of CMP pads: about 0.12 in = 3.05 mm (0.09-0.24 in; Applied Materials patent claims, docs/model.md 13g); IC1000's K-groove dimensions are not published", 0.0, None, False),
-        _P("pad_groove_width", "pad", "w_g", "m", "mm", 0.0, "Width of the pad's grooves (land = pitch - width), in [0, pitch); 0 with pitch 0", "About 0.02 in = 0.51 mm (0.015-0.04 in; same patent claims, docs/model.md 13g)", 0.0, None, False),
+        _P("pad_groove_pitch", "pad", "lambda_g", "m", "mm", 0.0, "Pitch of the pad's concentric grooves (0 = ungrooved): grooves at ambient pressure vent the slurry film over each land", "0 = the smooth pad of the paper; concentric grooves of CMP pads: about 0.12 in = 3.05 mm (0.09-0.24 in; Applied Materials patent claims, docs/model.md 13g), the 300mm preset's value (issue 32); IC1000's K-groove dimensions are not published", 0.0, None, False),
+        _P("pad_groove_width", "pad", "w_g", "m", "mm", 0.0, "Width of the pad's grooves (land = pitch - width), in [0, pitch); 0 with pitch 0", "About 0.02 in = 0.51 mm (0.015-0.04 in; same patent claims, docs/model.md 13g), the 300mm preset's value (issue 32)", 0.0, None, False),
         _P("friction_coefficient", "pad", "mu", "", "", 0.4, "Coulomb friction of pad summits on the wafer", "Lai, PhD thesis MIT (2001): 0.40-0.49 in contact mode", 0.0, None, False),
         # ---------------------------------------------------------------- numerics
         _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
@@ -180,6 +180,13 @@ PRESETS: dict[str, dict[str, Any]] = {
         "rotation_speed": "93 rpm",
         "wafer_speed_ratio": 87.0 / 93.0,
         "centre_distance": "0.2 m",
+        # the production pad is grooved (issue 32): the common concentric groove, 0.120 in pitch and 0.020 in
+        # wide (0.030 in deep), read in the claims of an Applied Materials patent ("Polishing pad having a
+        # grooved pattern for use in chemical mechanical polishing", claims 2, 4, 6, 7, 13; docs/_sources.md,
+        # section 11). IC1000 is sold K-grooved (Pureon datasheet; McAllister et al. 2019); the K-groove's own
+        # dimensions are not published, so these are the common groove, not a verified K-groove (model 13g).
+        "pad_groove_pitch": "3.05 mm",
+        "pad_groove_width": "0.51 mm",
     },
 }
 
