@@ -50,20 +50,31 @@ def contact_heights(gap_width, contact_height: float, asperity_radius: float) ->
 class DieEvolution:
     """The state of every cell of a die, advanced in time under blanket rate ``blanket_rate`` (m/s)."""
 
-    def __init__(self, layout, process, effective_density, blanket_rate: float, asperity_radius: float, feature=None):
+    def __init__(self, layout, process, effective_density, blanket_rate: float, asperity_radius: float, feature=None, incoming=None):
+        """``incoming`` (optional): the topography a level below left, ``(height, step)`` per cell (m).
+
+        ``height`` shifts both levels of a cell and every material interface of its film stack
+        (the deposited films follow it); ``step`` deepens the lower level against the upper one
+        by that much, at the cell's mean height (the new films' lower level over the old one's).
+        """
         if not (np.isfinite(blanket_rate) and blanket_rate > 0):
             raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.process = process
         self.stack = film_stack(process)
         self.rate = float(blanket_rate)
         eff = np.asarray(effective_density, dtype=float)
-        self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths())
+        self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths(), layout.spaces())
+        self.base = np.zeros(self.za.shape)  # the height of the film stack's reference (the original field oxide top)
+        if incoming is not None:
+            height, step = (np.broadcast_to(np.nan_to_num(np.asarray(v, dtype=float)), self.za.shape) for v in incoming)
+            a = self.f_local
+            self.base = height.copy()
+            self.za = self.za + height + (1.0 - a) * step
+            self.zb = self.zb + height - a * step
         self.f = np.clip(eff if eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
         self.h = contact_heights(gap, process.contact_height, asperity_radius)
         if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
-            with np.errstate(divide="ignore", invalid="ignore"):
-                pitch = np.where(layout.density > 0, layout.widths() / layout.density, np.nan)
-            self.h = self.h + feature.bulge(gap, pitch, self.f)
+            self.h = self.h + feature.bulge(gap, layout.pitches(), self.f)
         self.za0, self.zb0 = self.za.copy(), self.zb.copy()
         self.t = 0.0
         s0 = np.abs(self.za - self.zb)
@@ -73,12 +84,13 @@ class DieEvolution:
         self.t_clear = np.full(self.za.shape, np.inf) if self.stack.metal else self.t_planar.copy()
 
     # ------------------------------------------------------------------ materials
-    def _field_rate(self, za):
-        return self.stack.field_rate(za, self.rate)
+    def _field_rate(self, za, base=None):
+        return self.stack.field_rate(za - (self.base if base is None else base), self.rate)
 
-    def _boundary(self, za):
+    def _boundary(self, za, base=None):
         """The height at which the field changes material next (-inf: none)."""
-        return self.stack.boundary(za)
+        base = self.base if base is None else base
+        return self.stack.boundary(za - base) + base
 
     def rates(self, za=None, zb=None):
         """Removal rates (R_A, R_B) of the two levels at a state (default: now), m/s."""
@@ -139,11 +151,12 @@ class DieEvolution:
             if idx[0].size == 0:
                 break
             za, zb, f, h = self.za[idx], self.zb[idx], self.f[idx], self.h[idx]
-            ka = self._field_rate(za)
+            base = self.base[idx]
+            ka = self._field_rate(za, base)
             kb = np.full(za.shape, self.rate)
             dt = left[idx]
             a1, b1 = advance(za, zb, f, h, ka, kb, dt)
-            bound = self._boundary(za)
+            bound = self._boundary(za, base)
             cross = a1 <= bound
             t_seg = dt.copy()
             if cross.any():
@@ -161,7 +174,7 @@ class DieEvolution:
             if self.stack.metal and cross.any():
                 when = self.t + elapsed[cross] + t_seg[cross]
                 sub = tuple(i[cross] for i in idx)
-                cu = bound[cross] > 0  # the copper/barrier interface was reached
+                cu = bound[cross] - base[cross] > 0  # the copper/barrier interface was reached
                 self.t_copper_clear[tuple(i[cu] for i in sub)] = when[cu]
                 self.t_clear[tuple(i[~cu] for i in sub)] = when[~cu]
                 # a cell whose copper cleared before it planarized: its bulk stage ends there
@@ -176,7 +189,7 @@ class DieEvolution:
     def _planarity_events(self, idx, state, a1, b1, t_seg, elapsed):
         p = self.process
         za, zb = state[0], state[1]
-        open_ = np.isinf(self.t_planar[idx]) & self.stack.planarizing(za)
+        open_ = np.isinf(self.t_planar[idx]) & self.stack.planarizing(za - self.base[idx])
         s0, s1 = np.abs(za - zb), np.abs(a1 - b1)
         hit = open_ & (s0 > p.planarity) & (s1 <= p.planarity)
         if not hit.any():
@@ -208,7 +221,7 @@ class DieEvolution:
         if not self.stack.metal:
             return np.full(self.za.shape, np.nan)
         lines = self.f_local < 1.0
-        cleared = ~self.stack.planarizing(self.za)
+        cleared = ~self.stack.planarizing(self.za - self.base)
         return np.where(lines, np.where(cleared, self.za - self.zb, 0.0), np.nan)
 
     @property
@@ -216,7 +229,7 @@ class DieEvolution:
         """Copper: field oxide lost below its original top (m); NaN for oxide."""
         if not self.stack.metal:
             return np.full(self.za.shape, np.nan)
-        return np.maximum(-self.za, 0.0)
+        return np.maximum(self.base - self.za, 0.0)
 
     @property
     def mean_height(self) -> np.ndarray:
@@ -226,6 +239,16 @@ class DieEvolution:
     def removed_thickness(self) -> np.ndarray:
         """Removed volume per area of each cell since the start (m)."""
         return self.f_local * (self.za0 - self.za) + (1.0 - self.f_local) * (self.zb0 - self.zb)
+
+    @property
+    def thickness(self) -> np.ndarray:
+        """The final surface of each cell off the die's mean (m): :attr:`mean_height` minus its mean over the die."""
+        h = self.mean_height
+        return h - float(np.mean(h))
+
+    def topography(self) -> tuple[np.ndarray, np.ndarray]:
+        """What this level leaves to the next (``incoming`` of the next level): (surface off the die's mean, the residual local step), m."""
+        return self.thickness, np.nan_to_num(self.step_height)
 
     def removal_rate(self) -> np.ndarray:
         """Local volume removal rate per area (m/s): f R_A + (1 - f) R_B with the local fractions."""
