@@ -68,9 +68,11 @@ class DieEvolution:
         if incoming is not None:
             height, step = (np.broadcast_to(np.nan_to_num(np.asarray(v, dtype=float)), self.za.shape) for v in incoming)
             a = self.f_local
+            # the levels are tracked against the film stack's own reference (so its interfaces stay where they are),
+            # which sits at `base`; the outputs add it
             self.base = height.copy()
-            self.za = self.za + height + (1.0 - a) * step
-            self.zb = self.zb + height - a * step
+            self.za = self.za + (1.0 - a) * step
+            self.zb = self.zb - a * step
         self.f = np.clip(eff if eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
         self.h = contact_heights(gap, process.contact_height, asperity_radius)
         if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
@@ -84,13 +86,12 @@ class DieEvolution:
         self.t_clear = np.full(self.za.shape, np.inf) if self.stack.metal else self.t_planar.copy()
 
     # ------------------------------------------------------------------ materials
-    def _field_rate(self, za, base=None):
-        return self.stack.field_rate(za - (self.base if base is None else base), self.rate)
+    def _field_rate(self, za):
+        return self.stack.field_rate(za, self.rate)
 
-    def _boundary(self, za, base=None):
+    def _boundary(self, za):
         """The height at which the field changes material next (-inf: none)."""
-        base = self.base if base is None else base
-        return self.stack.boundary(za - base) + base
+        return self.stack.boundary(za)
 
     def rates(self, za=None, zb=None):
         """Removal rates (R_A, R_B) of the two levels at a state (default: now), m/s."""
@@ -151,12 +152,11 @@ class DieEvolution:
             if idx[0].size == 0:
                 break
             za, zb, f, h = self.za[idx], self.zb[idx], self.f[idx], self.h[idx]
-            base = self.base[idx]
-            ka = self._field_rate(za, base)
+            ka = self._field_rate(za)
             kb = np.full(za.shape, self.rate)
             dt = left[idx]
             a1, b1 = advance(za, zb, f, h, ka, kb, dt)
-            bound = self._boundary(za, base)
+            bound = self._boundary(za)
             cross = a1 <= bound
             t_seg = dt.copy()
             if cross.any():
@@ -174,7 +174,7 @@ class DieEvolution:
             if self.stack.metal and cross.any():
                 when = self.t + elapsed[cross] + t_seg[cross]
                 sub = tuple(i[cross] for i in idx)
-                cu = bound[cross] - base[cross] > 0  # the copper/barrier interface was reached
+                cu = bound[cross] > 0  # the copper/barrier interface was reached
                 self.t_copper_clear[tuple(i[cu] for i in sub)] = when[cu]
                 self.t_clear[tuple(i[~cu] for i in sub)] = when[~cu]
                 # a cell whose copper cleared before it planarized: its bulk stage ends there
@@ -189,7 +189,7 @@ class DieEvolution:
     def _planarity_events(self, idx, state, a1, b1, t_seg, elapsed):
         p = self.process
         za, zb = state[0], state[1]
-        open_ = np.isinf(self.t_planar[idx]) & self.stack.planarizing(za - self.base[idx])
+        open_ = np.isinf(self.t_planar[idx]) & self.stack.planarizing(za)
         s0, s1 = np.abs(za - zb), np.abs(a1 - b1)
         hit = open_ & (s0 > p.planarity) & (s1 <= p.planarity)
         if not hit.any():
@@ -221,7 +221,7 @@ class DieEvolution:
         if not self.stack.metal:
             return np.full(self.za.shape, np.nan)
         lines = self.f_local < 1.0
-        cleared = ~self.stack.planarizing(self.za - self.base)
+        cleared = ~self.stack.planarizing(self.za)
         return np.where(lines, np.where(cleared, self.za - self.zb, 0.0), np.nan)
 
     @property
@@ -229,12 +229,22 @@ class DieEvolution:
         """Copper: field oxide lost below its original top (m); NaN for oxide."""
         if not self.stack.metal:
             return np.full(self.za.shape, np.nan)
-        return np.maximum(self.base - self.za, 0.0)
+        return np.maximum(-self.za, 0.0)
 
     @property
     def mean_height(self) -> np.ndarray:
-        """Area-weighted mean surface height of each cell (m): f zA + (1 - f) zB with the local fractions."""
-        return self.f_local * self.za + (1.0 - self.f_local) * self.zb
+        """Area-weighted mean surface height of each cell (m): f zA + (1 - f) zB with the local fractions, plus the incoming height."""
+        return self.f_local * self.za + (1.0 - self.f_local) * self.zb + self.base
+
+    @property
+    def upper_height(self) -> np.ndarray:
+        """Height of level A (m), with the incoming height (``za`` is measured from the film stack's own reference)."""
+        return self.za + self.base
+
+    @property
+    def lower_height(self) -> np.ndarray:
+        """Height of level B (m), with the incoming height."""
+        return self.zb + self.base
 
     def removed_thickness(self) -> np.ndarray:
         """Removed volume per area of each cell since the start (m)."""

@@ -103,9 +103,20 @@ class Layout:
     @classmethod
     def from_windows(cls, windows, name: str | None = None) -> "Layout":
         """The die of a real layout's windows (:class:`cmpsim.layout.LayoutWindows`): every window a cell with its own density, width and space."""
-        rho = np.clip(np.asarray(windows.density, dtype=float), 0.0, 1.0)
+        # the last row and column of windows may reach past the die's outline: their fields are those of the part inside it
+        # (on the wafer the rest of such a window is the next die, which its opposite edge stands for in the periodic model)
+        W = float(windows.window)
+        x0, y0, x1, y1 = windows.bbox
+        fx = np.clip((np.minimum(windows.x + 0.5 * W, x1) - np.maximum(windows.x - 0.5 * W, x0)) / W, 0.0, 1.0)
+        fy = np.clip((np.minimum(windows.y + 0.5 * W, y1) - np.maximum(windows.y - 0.5 * W, y0)) / W, 0.0, 1.0)
+        inside = np.maximum(fy[:, None] * fx[None, :], 1e-300) * W * W
+        area = np.asarray(windows.density, dtype=float) * W * W
+        length = np.asarray(windows.boundary, dtype=float)
+        rho = np.clip(area / inside, 0.0, 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            space = np.where(length > 0, 2.0 * np.maximum(inside - area, 0.0) / length, np.where(rho < 1, np.sqrt(inside), 0.0))
         width = np.where(rho > 0, np.asarray(windows.width, dtype=float), 0.0)
-        return cls(rho, float(windows.window), width, name or windows.top, np.asarray(windows.space, dtype=float),
+        return cls(rho, W, width, name or windows.top, space,
                    tuple(float(v) for v in windows.origin), tuple(float(v) for v in windows.bbox), True, tuple(windows.layers))
 
     def with_fields(self, density=None, line_width=None, space=None) -> "Layout":

@@ -211,7 +211,7 @@ class DieResult:
         x, y = self.layout.coordinates()
         finite = {"time_to_planarize": ev.t_planar, "time_to_clear": ev.t_clear}
         maps = {"density": self.layout.density, "effective_density": self.effective_density, "line_width": self.layout.widths(),
-                "space": self.layout.spaces(), "upper_height": ev.za, "lower_height": ev.zb, "mean_height": ev.mean_height,
+                "space": self.layout.spaces(), "upper_height": ev.upper_height, "lower_height": ev.lower_height, "mean_height": ev.mean_height,
                 "thickness": ev.thickness, "step_height": ev.step_height,
                 "dishing": ev.dishing, "erosion": ev.erosion, **{k: np.where(np.isfinite(v), v, np.nan) for k, v in finite.items()}}
         where = "window centre, layout coordinates" if self.layout.windowed else "position on the die"
