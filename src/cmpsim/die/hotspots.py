@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SPEC_KINDS", "parse_spec", "find_hotspots", "write_lyrdb", "write_csv"]
+__all__ = ["SPEC_KINDS", "parse_spec", "find_hotspots", "count_hotspots", "write_lyrdb", "write_csv"]
 
 #: The quantities a hotspot limit applies to, and what each means.
 SPEC_KINDS = {
@@ -92,6 +92,20 @@ def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: st
             out.append(h)
     out.sort(key=lambda h: -abs(h["value"]) / h["limit"])
     return out
+
+
+def count_hotspots(fields: dict, x, y, cell: float, extent, spec: dict) -> int:
+    """The number of hotspots :func:`find_hotspots` would return (vectorised: no list is built)."""
+    x0, y0, x1, y1 = _window_boxes(np.asarray(x), np.asarray(y), cell, extent)
+    inside = (x1 > x0) & (y1 > y0)
+    n = 0
+    for kind, limit in spec.items():
+        v = fields.get(kind)
+        if v is None:
+            continue
+        with np.errstate(invalid="ignore"):
+            n += int(np.count_nonzero(inside & np.isfinite(v) & (np.abs(v) > limit)))
+    return n
 
 
 def public(hotspots: list[dict]) -> list[dict]:

@@ -119,13 +119,13 @@ class DieResult:
 
     def hotspot_count(self, spec: dict | None = None) -> int:
         """The number of hotspots (windows x quantities over their limits)."""
-        from .hotspots import find_hotspots
+        from .hotspots import count_hotspots
 
         spec = self.spec if spec is None else spec
         if not spec:
             return 0
         x, y = self.layout.coordinates()
-        return len(find_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, spec))
+        return count_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, spec)
 
     @property
     def time_to_planarize(self) -> float:
