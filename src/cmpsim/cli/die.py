@@ -1,4 +1,4 @@
-"""``cmpsim die``: a patterned die polished at the blanket rate of the wafer solve."""
+"""``cmpsim die``: a patterned die polished at the blanket rate of the wafer solve: a built-in die, a CSV grid, or a real layout (GDSII/OASIS)."""
 
 from __future__ import annotations
 
@@ -22,17 +22,29 @@ from .inputs import config_options, load_config, parse_assignments
               help="Contact height of a gap: summit sagitta plus the pad body's elastic bulge into it (wide lines keep dishing deeper), or the summit sagitta alone (cmpsim 0.3).")
 @click.option("--cell-size", "cell_text", metavar="SIZE", default=None, help="Cell size of a built-in die (default 50um).")
 @click.option("--blanket-rate", "rate_text", metavar="RATE", default=None, help="Blanket rate of a single die (e.g. 200nm/min); default the wafer-mean rate of the wafer solve.")
+@click.option("--layer", "layers", multiple=True, metavar="L/D|NAME", help="Layout: a layer/datatype (68/20) or a name (met1 with --pdk); repeatable, all merged.")
+@click.option("--window", "window_text", metavar="SIZE", default=None, help="Layout: the window side (default 20um): every window a cell of the die model.")
+@click.option("--top", "top", metavar="CELL", default=None, help="Layout: the top cell (where the file has several).")
+@click.option("--pdk", type=click.Choice(["sky130", "gf180mcu", "sg13g2"]), default=None, help="Layout: the open PDK whose layer map names the layers.")
+@click.option("--layer-map", "layer_map", type=click.Path(dir_okay=False), default=None, help="Layout: a TOML layer map (name = [\"L/D\", ...]).")
+@click.option("--stack", "stack_path", type=click.Path(dir_okay=False), default=None, help="Layout: a stack file (TOML, [[level]] with name, layers, process): levels polished bottom first over the topography each leaves.")
+@click.option("--spec", "specs", multiple=True, metavar="KIND=LIMIT", help="A hotspot limit: thickness=5nm, step_height=20nm, dishing=30nm, erosion=20nm (repeatable).")
 @config_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write die.nc, die.png, die.json (and wafer.nc, wafer.png with --wafer) to DIR.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write die.nc, die.png, die.json (wafer.nc, wafer.png with --wafer; hotspots.lyrdb, hotspots.csv on a layout) to DIR.")
 @click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
-def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, weighting, feature_contact, cell_text, rate_text, config_path, preset, assignments, grid, out_dir, as_json):
+def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, weighting, feature_contact, cell_text, rate_text, layers, window_text,
+                top, pdk, layer_map, stack_path, specs, config_path, preset, assignments, grid, out_dir, as_json):
     """Polish a patterned die: effective density, step heights, copper dishing and erosion.
 
     LAYOUT is a layout CSV (density grid, cell size, optional line widths; docs/model.md
-    section 18) or the name of a built-in test die (`cmpsim die --list`). The blanket rate
-    comes from a wafer-scale solve of the inputs (--config/--preset/--set/--grid).
+    section 18), the name of a built-in test die (`cmpsim die --list`), or a real layout
+    (.gds, .gds.gz, .oas) with --layer or --stack: every window of it a cell of the model,
+    with hotspots against --spec. The blanket rate comes from a wafer-scale solve of the
+    inputs (--config/--preset/--set/--grid).
     """
     from ..die import BUILTIN_LAYOUTS, simulate, simulate_wafer
+    from ..die.chip import is_layout_file, layout_die, read_stack, simulate_stack
+    from ..die.hotspots import parse_spec
     from ..die.report import to_json, write_die_outputs
     from ..solver.equilibrium import EquilibriumError
     from ..inputs.units import to_si
@@ -43,13 +55,46 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
         return
     if not layout:
         _fail("give a LAYOUT (a CSV file or a built-in die: cmpsim die --list)")
+    layout_arg = layout
+    real = layout not in BUILTIN_LAYOUTS and is_layout_file(layout)
+    stack = None
     try:
+        if not real:
+            given = [name for name, v in (("--layer", layers), ("--window", window_text), ("--top", top), ("--pdk", pdk),
+                                          ("--layer-map", layer_map), ("--stack", stack_path)) if v]
+            if given:
+                raise ValueError(f"{', '.join(given)} apply to a layout file (.gds, .gds.gz, .oas); {layout!r} is a CSV grid or a built-in die")
+        elif cell_text:
+            raise ValueError("--cell-size applies to the built-in dies; a layout's cells are its windows (--window)")
+        spec = parse_spec(list(specs))
         cfg = load_config(config_path, assignments, preset, grid)
-        kwargs = dict(process=process, planarization_length=to_si(pl_text, "m", "--planarization-length", "3 mm") if pl_text else None,
-                      weighting=weighting, feature_contact=feature_contact, cell_size=to_si(cell_text, "m", "--cell-size", "50 um") if cell_text else None,
-                      **parse_assignments(params))
+        pl = to_si(pl_text, "m", "--planarization-length", "3 mm") if pl_text else None
+        kwargs = dict(process=process, planarization_length=pl, weighting=weighting, feature_contact=feature_contact,
+                      cell_size=to_si(cell_text, "m", "--cell-size", "50 um") if cell_text else None, spec=spec, **parse_assignments(params))
         t = to_si(time_text, "s", "--time", "90 s") if time_text else None
-        if wafer:
+        window = to_si(window_text, "m", "--window", "20 um") if window_text else None
+        if real and stack_path:
+            if layers:
+                raise ValueError("give the layers in the stack file's [[level]] tables, not with --layer, when --stack is used")
+            if wafer:
+                raise ValueError("--wafer with --stack is not supported: run --wafer per level")
+            if params or process != "oxide":
+                raise ValueError("with --stack each level sets its process and inputs in the stack file (--process, --param do not apply)")
+            levels, options = read_stack(stack_path)
+            if window is None and "window" in options:
+                window = to_si(options["window"], "m", f"window in {stack_path}", "20 um")
+            rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
+            result = stack = simulate_stack(layout, levels, window, top=top or options.get("top"), pdk=pdk or options.get("pdk"),
+                                            layer_map=layer_map or options.get("layer_map"), config=cfg, blanket_rate=rate, time=t,
+                                            spec=parse_spec(options.get("spec")) | spec, planarization_length=pl, weighting=weighting,
+                                            feature_contact=feature_contact)
+        elif real:
+            if not layers:
+                raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml")
+            layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk, layer_map=layer_map)
+        if stack is not None:
+            pass
+        elif wafer:
             if rate_text:
                 raise ValueError("--blanket-rate applies to a single die; with --wafer the rates come from the wafer solve")
             result = simulate_wafer(layout, t, config=cfg, **kwargs)
@@ -62,7 +107,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
         _fail(str(exc))
     if out_dir:
         try:
-            written = write_die_outputs(result, out_dir)
+            written = write_die_outputs(result, out_dir, original_file=str(layout_arg) if real else "")
         except OSError as exc:
             _fail(f"cannot write to {out_dir}: {exc}")
     if as_json:
@@ -71,6 +116,11 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     from rich.console import Console
 
     console = Console()
+    if stack is not None or real:
+        _print_layout_run(console, result, stack is not None, wafer)
+        if out_dir:
+            console.print("wrote " + ", ".join(str(p) for p in written), highlight=False)
+        return
     die = getattr(result, "die", result)
     d = result.to_dict()
 
@@ -92,3 +142,31 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
                       f"time to {end[0]} {np.nanmin(end[1]):.1f}-{np.nanmax(end[1]):.1f} s", highlight=False)
     if out_dir:
         console.print("wrote " + ", ".join(str(p) for p in written), highlight=False)
+
+
+def _print_layout_run(console, result, is_stack: bool, wafer: bool) -> None:
+    """The terminal summary of a run on a real layout: per level the windows, ranges and hotspots; the worst hotspots."""
+    levels = result.levels if is_stack else [getattr(result, "die", result)]
+
+    def nm(v):
+        return "-" if v is None else f"{v * 1e9:.4g} nm"
+
+    rows = []
+    for lv in levels:
+        d = lv.to_dict()
+        ny, nx = lv.layout.shape
+        rows.append([lv.level or lv.layout.name, lv.process.kind, f"{nx} x {ny} of {lv.layout.cell_size * 1e6:g} um",
+                     f"{lv.time:.1f} s", nm(lv.thickness_range), nm(d["step_height_max"]), nm(d["dishing_max"]), nm(d["erosion_max"]),
+                     str(d["hotspot_count"])])
+    console.print(_rich_table("die on a real layout", ["level", "process", "windows", "time", "thickness range", "step height max",
+                                                       "dishing max", "erosion max", "hotspots"], rows))
+    hot = result.to_dict()["hotspots"] if is_stack else levels[0].to_dict()["hotspots"]
+    if hot:
+        show = [[h.get("level", ""), h["kind"], f"{h['x'] * 1e6:.1f}", f"{h['y'] * 1e6:.1f}", nm(h["value"]), nm(h["limit"])] for h in hot[:10]]
+        console.print(_rich_table(f"worst hotspots ({len(hot)} in all)", ["level", "kind", "x (um)", "y (um)", "value", "limit"], show))
+    if wafer:
+        import numpy as np
+
+        console.print(f"{len(result.x)} dies ({result.reading} reading); blanket rate {np.min(result.blanket_rate) * 6e10:.4g}-"
+                      f"{np.max(result.blanket_rate) * 6e10:.4g} nm/min; hotspots per die {int(np.min(result.hotspot_count))}-"
+                      f"{int(np.max(result.hotspot_count))}, {int(np.sum(result.hotspot_count))} on the wafer", highlight=False)

@@ -50,20 +50,33 @@ def contact_heights(gap_width, contact_height: float, asperity_radius: float) ->
 class DieEvolution:
     """The state of every cell of a die, advanced in time under blanket rate ``blanket_rate`` (m/s)."""
 
-    def __init__(self, layout, process, effective_density, blanket_rate: float, asperity_radius: float, feature=None):
+    def __init__(self, layout, process, effective_density, blanket_rate: float, asperity_radius: float, feature=None, incoming=None):
+        """``incoming`` (optional): the topography a level below left, ``(height, step)`` per cell (m).
+
+        ``height`` shifts both levels of a cell and every material interface of its film stack
+        (the deposited films follow it); ``step`` deepens the lower level against the upper one
+        by that much, at the cell's mean height (the new films' lower level over the old one's).
+        """
         if not (np.isfinite(blanket_rate) and blanket_rate > 0):
             raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.process = process
         self.stack = film_stack(process)
         self.rate = float(blanket_rate)
         eff = np.asarray(effective_density, dtype=float)
-        self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths())
+        self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths(), layout.spaces())
+        self.base = np.zeros(self.za.shape)  # the height of the film stack's reference (the original field oxide top)
+        if incoming is not None:
+            height, step = (np.broadcast_to(np.nan_to_num(np.asarray(v, dtype=float)), self.za.shape) for v in incoming)
+            a = self.f_local
+            # the levels are tracked against the film stack's own reference (so its interfaces stay where they are),
+            # which sits at `base`; the outputs add it
+            self.base = height.copy()
+            self.za = self.za + (1.0 - a) * step
+            self.zb = self.zb - a * step
         self.f = np.clip(eff if eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
         self.h = contact_heights(gap, process.contact_height, asperity_radius)
         if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
-            with np.errstate(divide="ignore", invalid="ignore"):
-                pitch = np.where(layout.density > 0, layout.widths() / layout.density, np.nan)
-            self.h = self.h + feature.bulge(gap, pitch, self.f)
+            self.h = self.h + feature.bulge(gap, layout.pitches(), self.f)
         self.za0, self.zb0 = self.za.copy(), self.zb.copy()
         self.t = 0.0
         s0 = np.abs(self.za - self.zb)
@@ -220,12 +233,32 @@ class DieEvolution:
 
     @property
     def mean_height(self) -> np.ndarray:
-        """Area-weighted mean surface height of each cell (m): f zA + (1 - f) zB with the local fractions."""
-        return self.f_local * self.za + (1.0 - self.f_local) * self.zb
+        """Area-weighted mean surface height of each cell (m): f zA + (1 - f) zB with the local fractions, plus the incoming height."""
+        return self.f_local * self.za + (1.0 - self.f_local) * self.zb + self.base
+
+    @property
+    def upper_height(self) -> np.ndarray:
+        """Height of level A (m), with the incoming height (``za`` is measured from the film stack's own reference)."""
+        return self.za + self.base
+
+    @property
+    def lower_height(self) -> np.ndarray:
+        """Height of level B (m), with the incoming height."""
+        return self.zb + self.base
 
     def removed_thickness(self) -> np.ndarray:
         """Removed volume per area of each cell since the start (m)."""
         return self.f_local * (self.za0 - self.za) + (1.0 - self.f_local) * (self.zb0 - self.zb)
+
+    @property
+    def thickness(self) -> np.ndarray:
+        """The final surface of each cell off the die's mean (m): :attr:`mean_height` minus its mean over the die."""
+        h = self.mean_height
+        return h - float(np.mean(h))
+
+    def topography(self) -> tuple[np.ndarray, np.ndarray]:
+        """What this level leaves to the next (``incoming`` of the next level): (surface off the die's mean, the residual local step), m."""
+        return self.thickness, np.nan_to_num(self.step_height)
 
     def removal_rate(self) -> np.ndarray:
         """Local volume removal rate per area (m/s): f R_A + (1 - f) R_B with the local fractions."""

@@ -22,7 +22,9 @@ mask is drawn) and every row has the same number of values. The die is nx x ny c
 ``cell_size``.
 
 **Regions** (:meth:`Layout.regions`): the connected sets of cells with the same density and line
-width: the blocks and line arrays of the layout, numbered from the bottom left.
+width: the blocks and line arrays of the layout, numbered from the bottom left. They belong to
+block layouts; a die made from a real layout's windows (:meth:`Layout.from_windows`) has a
+density, width and space of its own in every window and is reported per window instead.
 """
 
 from __future__ import annotations
@@ -56,12 +58,23 @@ class Region:
 
 @dataclass(frozen=True)
 class Layout:
-    """Local pattern density over one die (rows along y from the bottom), cell size (m), optional line widths (m)."""
+    """Local pattern density over one die (rows along y from the bottom), cell size (m), optional line widths (m).
+
+    ``space`` (m, optional) is the line space of every cell; without it the space of a line
+    array, w (1 - rho) / rho, is used. ``origin`` (m) is the lower-left corner of cell [0, 0] in
+    the layout's coordinates and ``bbox`` (xmin, ymin, xmax, ymax, m) the die's outline when it
+    came from a real layout (:meth:`from_windows`; ``windowed`` is then True).
+    """
 
     density: np.ndarray
     cell_size: float
     line_width: np.ndarray | None = None
     name: str = "layout"
+    space: np.ndarray | None = None
+    origin: tuple[float, float] = (0.0, 0.0)
+    bbox: tuple[float, float, float, float] | None = None
+    windowed: bool = False
+    layers: tuple = ()
 
     def __post_init__(self) -> None:
         rho = np.asarray(self.density, dtype=float)
@@ -79,6 +92,38 @@ class Layout:
             if not np.all(np.isfinite(w)) or w.min() < 0:
                 raise ValueError("line_width must be >= 0 m in every cell (0: no lines)")
             object.__setattr__(self, "line_width", w)
+        if self.space is not None:
+            sp = np.asarray(self.space, dtype=float)
+            if sp.shape != rho.shape:
+                raise ValueError(f"space grid has shape {sp.shape}, density {rho.shape}: they must match")
+            if not np.all(np.isfinite(sp)) or sp.min() < 0:
+                raise ValueError("space must be >= 0 m in every cell")
+            object.__setattr__(self, "space", sp)
+
+    @classmethod
+    def from_windows(cls, windows, name: str | None = None) -> "Layout":
+        """The die of a real layout's windows (:class:`cmpsim.layout.LayoutWindows`): every window a cell with its own density, width and space."""
+        # the last row and column of windows may reach past the die's outline: their fields are those of the part inside it
+        # (on the wafer the rest of such a window is the next die, which its opposite edge stands for in the periodic model)
+        W = float(windows.window)
+        x0, y0, x1, y1 = windows.bbox
+        fx = np.clip((np.minimum(windows.x + 0.5 * W, x1) - np.maximum(windows.x - 0.5 * W, x0)) / W, 0.0, 1.0)
+        fy = np.clip((np.minimum(windows.y + 0.5 * W, y1) - np.maximum(windows.y - 0.5 * W, y0)) / W, 0.0, 1.0)
+        inside = np.maximum(fy[:, None] * fx[None, :], 1e-300) * W * W
+        area = np.asarray(windows.density, dtype=float) * W * W
+        length = np.asarray(windows.boundary, dtype=float)
+        rho = np.clip(area / inside, 0.0, 1.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            space = np.where(length > 0, 2.0 * np.maximum(inside - area, 0.0) / length, np.where(rho < 1, np.sqrt(inside), 0.0))
+        width = np.where(rho > 0, np.asarray(windows.width, dtype=float), 0.0)
+        return cls(rho, W, width, name or windows.top, space,
+                   tuple(float(v) for v in windows.origin), tuple(float(v) for v in windows.bbox), True, tuple(windows.layers))
+
+    def with_fields(self, density=None, line_width=None, space=None) -> "Layout":
+        """A copy with some per-cell fields replaced (e.g. a die with fill added)."""
+        from dataclasses import replace
+
+        return replace(self, **{k: v for k, v in (("density", density), ("line_width", line_width), ("space", space)) if v is not None})
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -92,15 +137,39 @@ class Layout:
         return nx * self.cell_size, ny * self.cell_size
 
     def coordinates(self) -> tuple[np.ndarray, np.ndarray]:
-        """Cell-centre coordinates (x of the columns, y of the rows), m, origin at the bottom-left corner."""
+        """Cell-centre coordinates (x of the columns, y of the rows), m, from :attr:`origin` (the bottom-left corner; a real layout's coordinates)."""
         ny, nx = self.shape
-        return (np.arange(nx) + 0.5) * self.cell_size, (np.arange(ny) + 0.5) * self.cell_size
+        return self.origin[0] + (np.arange(nx) + 0.5) * self.cell_size, self.origin[1] + (np.arange(ny) + 0.5) * self.cell_size
+
+    @property
+    def extent(self) -> tuple[float, float, float, float]:
+        """(xmin, ymin, xmax, ymax) of the die, m: the layout's bounding box, or the grid's."""
+        if self.bbox is not None:
+            return self.bbox
+        wx, wy = self.size
+        return self.origin[0], self.origin[1], self.origin[0] + wx, self.origin[1] + wy
 
     def widths(self) -> np.ndarray:
         """Line width of every cell (m); NaN where the layout gives none."""
         if self.line_width is None:
             return np.full(self.shape, np.nan)
         return np.where(self.line_width > 0, self.line_width, np.nan)
+
+    def spaces(self) -> np.ndarray:
+        """Line space of every cell (m): the given ``space``, else w (1 - rho) / rho; NaN where a cell has no lines or no space."""
+        rho = self.density
+        two = (rho > 0) & (rho < 1)
+        if self.space is not None:
+            return np.where(two & (self.space > 0), self.space, np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(two, self.widths() * (1.0 - rho) / rho, np.nan)
+
+    def pitches(self) -> np.ndarray:
+        """Line pitch of every cell (m): width + space; NaN without lines."""
+        if self.space is not None:
+            return np.where(self.density > 0, self.widths() + self.space, np.nan)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(self.density > 0, self.widths() / self.density, np.nan)
 
     def regions(self) -> list[Region]:
         """The blocks and line arrays: connected cells of equal (density, line width)."""

@@ -94,6 +94,38 @@ class DieResult:
     #: the length derived from the pad in each convention ("gaussian", "elliptic", m) and "elliptic_truncation" (r_t / a)
     conventions: dict = field(default_factory=dict, repr=False)
     feature_contact: str = "summit"
+    #: hotspot limits, kind -> m (:mod:`cmpsim.die.hotspots`)
+    spec: dict = field(default_factory=dict)
+    #: the level's name in a stack (None: a single level)
+    level: str | None = None
+
+    @property
+    def thickness_range(self) -> float:
+        """Max - min of the final mean surface height over the die (m)."""
+        h = self.evolution.mean_height
+        return float(np.max(h) - np.min(h))
+
+    def fields(self) -> dict:
+        """The per-window quantities that have limits (m): thickness, step_height, dishing, erosion."""
+        ev = self.evolution
+        return {"thickness": ev.thickness, "step_height": ev.step_height, "dishing": ev.dishing, "erosion": ev.erosion}
+
+    def hotspots(self, spec: dict | None = None) -> list[dict]:
+        """The windows over a limit (:func:`cmpsim.die.hotspots.find_hotspots`; default limits :attr:`spec`), with their window boxes."""
+        from .hotspots import find_hotspots
+
+        x, y = self.layout.coordinates()
+        return find_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, self.spec if spec is None else spec, self.level)
+
+    def hotspot_count(self, spec: dict | None = None) -> int:
+        """The number of hotspots (windows x quantities over their limits)."""
+        from .hotspots import count_hotspots
+
+        spec = self.spec if spec is None else spec
+        if not spec:
+            return 0
+        x, y = self.layout.coordinates()
+        return count_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, spec)
 
     @property
     def time_to_planarize(self) -> float:
@@ -107,6 +139,8 @@ class DieResult:
 
     def regions(self) -> list[dict]:
         """Per block or line array, at its measurement site (the cell deepest inside it): density, line_width, step_height, dishing, erosion (SI)."""
+        if self.layout.windowed:  # a real layout: every window is its own "region"; the maps are the result
+            return []
         ev = self.evolution
         x, y = self.layout.coordinates()
         out = []
@@ -132,8 +166,11 @@ class DieResult:
 
     def to_dict(self) -> dict:
         """The object of ``cmpsim die --json`` (SI units; null where a quantity does not apply or was not reached)."""
+        from .hotspots import public
+
         ev = self.evolution
-        return {
+        hot = self.hotspots() if self.spec else []
+        out = {
             "layout": self.layout.name,
             "process": self.process.kind,
             "time": self.time,
@@ -152,10 +189,21 @@ class DieResult:
             "step_height_max": _finite(float(np.nanmax(ev.step_height))) if np.isfinite(ev.step_height).any() else None,
             "dishing_max": _max(ev.dishing),
             "erosion_max": _max(ev.erosion),
-            "regions": self.regions(),
+            "thickness_range": self.thickness_range,
+            "spec": dict(self.spec),
+            "hotspot_count": len(hot),
+            "hotspots": public(hot),
             "inputs": self.process.to_dict(),
             "units": dict(_UNITS),
         }
+        lay = self.layout
+        if lay.windowed:
+            ny, nx = lay.shape
+            out["windows"] = {"nx": nx, "ny": ny, "window": lay.cell_size, "origin": list(lay.origin), "bbox": list(lay.bbox),
+                              "layers": [f"{a}/{b}" for a, b in lay.layers], "top": lay.name}
+        else:
+            out["regions"] = self.regions()
+        return out
 
     def dataset(self):
         """The die maps as an ``xarray.Dataset`` on x, y (m) with CF attributes (units, long_name)."""
@@ -163,14 +211,20 @@ class DieResult:
         x, y = self.layout.coordinates()
         finite = {"time_to_planarize": ev.t_planar, "time_to_clear": ev.t_clear}
         maps = {"density": self.layout.density, "effective_density": self.effective_density, "line_width": self.layout.widths(),
-                "upper_height": ev.za, "lower_height": ev.zb, "mean_height": ev.mean_height, "step_height": ev.step_height,
+                "space": self.layout.spaces(), "upper_height": ev.upper_height, "lower_height": ev.lower_height, "mean_height": ev.mean_height,
+                "thickness": ev.thickness, "step_height": ev.step_height,
                 "dishing": ev.dishing, "erosion": ev.erosion, **{k: np.where(np.isfinite(v), v, np.nan) for k, v in finite.items()}}
-        coords = {"x": ("x", x, {"units": "m", "long_name": "position on the die", "axis": "X"}),
-                  "y": ("y", y, {"units": "m", "long_name": "position on the die", "axis": "Y"})}
+        where = "window centre, layout coordinates" if self.layout.windowed else "position on the die"
+        coords = {"x": ("x", x, {"units": "m", "long_name": where, "axis": "X"}),
+                  "y": ("y", y, {"units": "m", "long_name": where, "axis": "Y"})}
         scalars = {"time": self.time, "blanket_rate": self.blanket_rate, "planarization_length": self.planarization_length,
                    "planarization_length_from_pad": self.planarization_length_from_pad,
                    **{f"planarization_length_{k}_from_pad": self.conventions[k] for k in ("gaussian", "elliptic") if k in self.conventions}}
+        scalars["thickness_range"] = self.thickness_range
         ds = _cf_dataset(("y", "x"), maps, MAP_OUTPUTS, scalars, coords, f"cmpsim die: {self.layout.name}, {self.process.kind}")
+        if self.layout.windowed:
+            ds.attrs["layers"] = ", ".join(f"{a}/{b}" for a, b in self.layout.layers)
+            ds.attrs["window"] = f"{self.layout.cell_size:g} m"
         ds.attrs["references"] = "Stine et al., IEEE TSM 11, 129 (1998); Ouma et al., IEEE TSM 15, 232 (2002); docs/model.md section 18"
         return ds
 
@@ -179,19 +233,33 @@ class DieResult:
         import matplotlib.pyplot as plt
 
         ev = self.evolution
-        x, y = self.layout.coordinates()
-        ext = [0, x[-1] + x[0], 0, y[-1] + y[0]]
+        lay = self.layout
+        ny, nx = lay.shape
+        ext = [lay.origin[0], lay.origin[0] + nx * lay.cell_size, lay.origin[1], lay.origin[1] + ny * lay.cell_size]
         ext = [v * 1e3 for v in ext]
         last = ("dishing", ev.dishing) if ev.stack.metal else ("step height", ev.step_height)
-        panels = [("local density", self.layout.density, "1"), ("effective density", self.effective_density, "1"),
-                  ("mean surface height", ev.mean_height * 1e9, "nm"), (last[0], last[1] * 1e9, "nm")]
-        fig, axes = plt.subplots(2, 2, figsize=(10, 8.4), layout="constrained")
-        for ax, (title, data, unit) in zip(axes.flat, panels):
+        panels = [("local density", lay.density, "1", None), ("effective density", self.effective_density, "1", None),
+                  ("mean surface height", ev.mean_height * 1e9, "nm", "thickness"), (last[0], last[1] * 1e9, "nm", last[0].replace(" ", "_"))]
+        if ev.stack.metal:
+            panels.append(("erosion", ev.erosion * 1e9, "nm", "erosion"))
+        hot = self.hotspots() if self.spec else []
+        cols = 3 if len(panels) > 4 else 2
+        fig, axes = plt.subplots(2, cols, figsize=(5 * cols, 8.4), layout="constrained")
+        for ax in axes.flat[len(panels):]:
+            ax.set_visible(False)
+        for ax, (title, data, unit, kind) in zip(axes.flat, panels):
             im = ax.imshow(data, origin="lower", extent=ext, cmap="viridis", interpolation="nearest")
             ax.set_title(title, fontsize=10)
             ax.set_xlabel("x (mm)")
             ax.set_ylabel("y (mm)")
             fig.colorbar(im, ax=ax, label=f"{title} ({unit})")
+            mark = [h for h in hot if h["kind"] == kind] if kind else []
+            if kind == "thickness":  # the final surface carries the hotspots of every kind
+                mark = hot
+            if mark:
+                ax.plot([h["x"] * 1e3 for h in mark], [h["y"] * 1e3 for h in mark], "s", mfc="none", mec="red", ms=4, mew=0.8,
+                        label=f"{len(mark)} hotspots")
+                ax.legend(loc="upper right", fontsize=7)
         fig.suptitle(f"die {self.layout.name!r}, {self.process.kind}, t = {self.time:.0f} s, K = {self.blanket_rate * 6e10:.0f} nm/min, "
                      f"PL = {self.planarization_length * 1e3:.2f} mm")
         return fig
@@ -231,6 +299,8 @@ MAP_OUTPUTS = {
     "erosion": ("m", "field oxide lost below its original top"),
     "time_to_planarize": ("s", "time at which the cell's step fell below the planarity threshold"),
     "time_to_clear": ("s", "time at which the cell cleared (copper: barrier off the field)"),
+    "space": ("m", "line space"),
+    "thickness": ("m", "final mean surface height of the cell off the die's mean"),
 }
 #: The scalars of a die run: name -> (SI unit, long name).
 SCALAR_OUTPUTS = {
@@ -240,6 +310,7 @@ SCALAR_OUTPUTS = {
     "planarization_length_from_pad": ("m", "planarization length derived from the pad stack, in the convention of the weighting used"),
     "planarization_length_gaussian_from_pad": ("m", "planarization length derived from the pad stack, Gaussian convention (peak and integral of a square window of side L)"),
     "planarization_length_elliptic_from_pad": ("m", "planarization length derived from the pad stack, Ouma's elliptic convention (L = 2a, the weight at 2/pi of its peak)"),
+    "thickness_range": ("m", "max - min of the final mean surface height over the die"),
 }
 #: What L means in each weighting (the JSON's ``weighting_definition``).
 WEIGHTING_DEFINITIONS = {
@@ -258,10 +329,13 @@ WAFER_OUTPUTS = {
     "dishing_max": ("m", "largest copper dishing on the die"),
     "erosion_max": ("m", "largest oxide erosion on the die"),
     "step_height_max": ("m", "largest step height on the die"),
+    "thickness_range": ("m", "max - min of the die's final mean surface height"),
+    "hotspot_count": ("1", "number of hotspots on the die (windows x quantities over their limits)"),
 }
 
 #: The unit of every key of the JSON of a die run (``"units"`` of :meth:`DieResult.to_dict`).
-_UNITS = {k: unit for table in (MAP_OUTPUTS, SCALAR_OUTPUTS, WAFER_OUTPUTS) for k, (unit, _) in table.items()} | {"pitch": "m", "wafer_diameter": "m", "elliptic_truncation": "1"}
+_UNITS = {k: unit for table in (MAP_OUTPUTS, SCALAR_OUTPUTS, WAFER_OUTPUTS) for k, (unit, _) in table.items()} | {"pitch": "m", "wafer_diameter": "m", "elliptic_truncation": "1", "hotspots": "m", "spec": "m", "window": "m",
+                                                                                            "origin": "m", "bbox": "m", "hotspot_count": "1"}
 
 
 def _end_point(ev: DieEvolution) -> float:
@@ -303,7 +377,7 @@ def _prepare(layout, config, process, planarization_length, weighting, cell_size
 
 def simulate(layout, time: float | None = None, *, config=None, blanket_rate: float | None = None, process=None,
              planarization_length: float | None = None, weighting: str = "gaussian", cell_size: float | None = None,
-             feature_contact: str = "elastic", **process_values) -> DieResult:
+             feature_contact: str = "elastic", incoming=None, spec=None, **process_values) -> DieResult:
     """Polish one die (docs/model.md, section 18).
 
     Parameters
@@ -330,7 +404,14 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
     feature_contact : "elastic" or "summit"
         The contact height of a gap: the summit sagitta plus the pad body's elastic bulge into
         it (default, :mod:`cmpsim.die.reach`), or the summit sagitta alone (cmpsim 0.3).
+    incoming : (height, step), optional
+        The topography a level below left on every cell (m; :meth:`DieEvolution.topography`).
+    spec : dict, optional
+        Hotspot limits, kind -> m or text with units (:mod:`cmpsim.die.hotspots`).
     """
+    from .hotspots import parse_spec
+
+    spec = parse_spec(spec)
     config, layout, process, w, derived, eff, fc = _prepare(layout, config, process, planarization_length, weighting, cell_size,
                                                             feature_contact, **process_values)
     if blanket_rate is None:
@@ -339,12 +420,21 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
         blanket_rate = float(solve(config, relative=False).removal_rate_mean)
     if time is not None and not (math.isfinite(time) and time >= 0):
         raise ValueError(f"time must be >= 0 s; got {time!r}")
-    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc)
+    return _polish(layout, process, config, float(blanket_rate), time, eff, fc, incoming,
+                   DieResult(layout, process, 0.0, float(blanket_rate), w.length, derived, weighting, eff, None, _conventions(config),
+                             feature_contact, spec))
+
+
+def _polish(layout, process, config, blanket_rate, time, eff, fc, incoming, template: DieResult) -> DieResult:
+    """Evolve the die to ``time`` (default the end point x (1 + over_polish)); the result is ``template`` with the evolution and time set."""
+    from dataclasses import replace
+
+    ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc, incoming)
     t_end = _end_point(ev)  # also gives every cell's event times, reached or not by `time`
     if time is None:
         time = t_end * (1.0 + process.over_polish)
-    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc))
-    return DieResult(layout, process, float(time), float(blanket_rate), w.length, derived, weighting, eff, ev, _conventions(config), feature_contact)
+    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc, incoming))
+    return replace(template, time=float(time), evolution=ev)
 
 
 # ------------------------------------------------------------------------------ the wafer
@@ -388,19 +478,26 @@ class WaferDies:
     dishing_max: np.ndarray = field(default=None, repr=False)
     erosion_max: np.ndarray = field(default=None, repr=False)
     step_height_max: np.ndarray = field(default=None, repr=False)
+    thickness_range: np.ndarray = field(default=None, repr=False)
+    hotspot_count: np.ndarray = field(default=None, repr=False)
+    #: how the dies were read: "exact" (each at its own equivalent time) or "sampled" (interpolated between sampled times)
+    reading: str = "exact"
 
     def to_dict(self) -> dict:
         """The object of ``cmpsim die --wafer --json``: the die at the reference rate plus the list ``dies``."""
         out = self.die.to_dict()
         out["time"] = self.time
         out["wafer_diameter"] = float(self.result.config.wafer_diameter)
+        out["die_reading"] = self.reading
         out["dies"] = [
             {"x": float(a), "y": float(b), "blanket_rate": float(k), "time_to_clear": _finite(float(tc)),
              "time_to_planarize": _finite(float(tp)), "dishing_max": _finite(float(d)), "erosion_max": _finite(float(e)),
-             "step_height_max": _finite(float(s))}
-            for a, b, k, tc, tp, d, e, s in zip(self.x, self.y, self.blanket_rate, self.time_to_clear, self.time_to_planarize,
-                                                 self.dishing_max, self.erosion_max, self.step_height_max)
+             "step_height_max": _finite(float(s)), "thickness_range": _finite(float(r)), "hotspot_count": int(n)}
+            for a, b, k, tc, tp, d, e, s, r, n in zip(self.x, self.y, self.blanket_rate, self.time_to_clear, self.time_to_planarize,
+                                                       self.dishing_max, self.erosion_max, self.step_height_max, self.thickness_range,
+                                                       self.hotspot_count)
         ]
+        out["wafer_hotspot_count"] = int(np.sum(self.hotspot_count))
         return out
 
     def dataset(self):
@@ -421,10 +518,15 @@ class WaferDies:
             panels = [("dishing_max", self.dishing_max, "nm", 1e9), ("erosion_max", self.erosion_max, "nm", 1e9), ("time_to_clear", self.time_to_clear, "s", 1.0)]
         else:  # oxide: no dishing or erosion; its end point is planarity
             panels = [("step_height_max", self.step_height_max, "nm", 1e9), ("time_to_planarize", self.time_to_planarize, "s", 1.0)]
+        if self.die.spec:
+            panels.append(("hotspot_count", self.hotspot_count, "1", 1.0))
+        elif self.die.layout.windowed:
+            panels.append(("thickness_range", self.thickness_range, "nm", 1e9))
         fig, axes = plt.subplots(1, len(panels), figsize=(5 * len(panels), 4.8), layout="constrained")
         for ax, (name, values, unit, scale) in zip(axes, panels):
+            lw = 0.3 if len(self.x) < 2000 else 0.0
             rects = [Rectangle(((a - 0.5 * wx) * 1e3, (b - 0.5 * wy) * 1e3), wx * 1e3, wy * 1e3) for a, b in zip(self.x, self.y)]
-            pc = PatchCollection(rects, cmap="viridis", edgecolor="white", linewidth=0.3)
+            pc = PatchCollection(rects, cmap="magma_r" if name == "hotspot_count" else "viridis", edgecolor="white", linewidth=lw)
             vals = np.asarray(values, dtype=float) * scale
             pc.set_array(np.where(np.isfinite(vals), vals, np.nan))
             ax.add_collection(pc)
@@ -440,15 +542,27 @@ class WaferDies:
         return fig
 
 
+#: Up to this many dies, each die is read at its own equivalent time; beyond, at this many equally spaced times, interpolated.
+WAFER_EXACT_DIES = 400
+
+
 def simulate_wafer(layout, time: float | None = None, *, config=None, result=None, process=None, planarization_length: float | None = None,
-                   weighting: str = "gaussian", cell_size: float | None = None, feature_contact: str = "elastic", **process_values) -> WaferDies:
+                   weighting: str = "gaussian", cell_size: float | None = None, feature_contact: str = "elastic", spec=None,
+                   **process_values) -> WaferDies:
     """Polish every die of a wafer (docs/model.md, section 18.7).
 
     One wafer solve (``result``, or ``cmpsim.solve(config)``) gives the blanket rate at each die
     centre (:func:`blanket_rates`); the dies tile the wafer inside its ``edge_exclusion``
     (:func:`die_sites`, die size = layout size). ``time`` (s) defaults to the end point of the
-    slowest die times 1 + ``over_polish``. Other arguments as :func:`simulate`.
+    slowest die times 1 + ``over_polish``. ``spec`` (hotspot limits) gives each die's
+    ``hotspot_count``. Up to :data:`WAFER_EXACT_DIES` dies each is read at its own equivalent
+    time; a wafer of more (small dies) is read at that many equally spaced equivalent times and
+    each die's values interpolated linearly between them (``reading = "sampled"``; hotspot counts
+    rounded). Other arguments as :func:`simulate`.
     """
+    from .hotspots import parse_spec
+
+    spec = parse_spec(spec)
     if result is not None and config is not None and config.to_dict() != result.config.to_dict():
         raise ValueError("give config or the result of its solve, not a result of other inputs: the dies take the pad and the wafer from result.config")
     if result is not None:
@@ -477,12 +591,24 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     order = np.argsort(t_equiv)
     ev = _at(ev, float(t_equiv[order[0]]), lambda: DieEvolution(layout, process, eff, k_ref, config.asperity_radius, fc))
     n = len(x)
-    dish, ero, step = np.empty(n), np.empty(n), np.empty(n)
-    for i in order:
-        ev.advance_to(float(t_equiv[i]))
-        dish[i], ero[i], step[i] = (np.nan if v is None else v for v in (_max(ev.dishing), _max(ev.erosion), _max(ev.step_height)))
+    reading = "exact" if n <= WAFER_EXACT_DIES else "sampled"
+    times = t_equiv[order] if reading == "exact" else np.linspace(t_equiv[order[0]], t_equiv[order[-1]], WAFER_EXACT_DIES)
+    probe = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev, {}, feature_contact, spec)
+    vals = np.empty((len(times), 5))
+    for j, t in enumerate(times):
+        ev.advance_to(float(t))
+        vals[j, :3] = [np.nan if v is None else v for v in (_max(ev.dishing), _max(ev.erosion), _max(ev.step_height))]
+        vals[j, 3] = probe.thickness_range
+        vals[j, 4] = probe.hotspot_count()
+    if reading == "exact":
+        per_die = np.empty((n, 5))
+        per_die[order] = vals
+    else:
+        per_die = np.stack([np.interp(t_equiv, times, vals[:, c]) for c in range(5)], axis=1)
+        per_die[:, 4] = np.rint(per_die[:, 4])
+    dish, ero, step, trange, hot = (per_die[:, c] for c in range(5))
     # event times scale back with the rate; events after the reference die's last time are not known
     tc = ev.t_clear.max() * k_ref / k
     tp = ev.t_planar.max() * k_ref / k
-    die = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev, _conventions(config), feature_contact)
-    return WaferDies(die, result, float(time), x, y, k, tc, tp, dish, ero, step)
+    die = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev, _conventions(config), feature_contact, spec)
+    return WaferDies(die, result, float(time), x, y, k, tc, tp, dish, ero, step, trange, hot.astype(int), reading)

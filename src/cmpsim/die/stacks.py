@@ -24,8 +24,11 @@ class FilmStack(Protocol):
     #: The film whose blanket rate drives the stack (the wafer solve's ``film`` input).
     film: str
 
-    def levels(self, density, width):
-        """(local fraction of level A, whether the effective density is that of A (True) or of B, gap width of the lower level (m), zA, zB)."""
+    def levels(self, density, width, space):
+        """(local fraction of level A, whether the effective density is that of A (True) or of B, gap width of the lower level (m), zA, zB).
+
+        ``width`` and ``space`` (m) are the line width and space of every cell, NaN where a cell has none.
+        """
 
     def field_rate(self, za, rate):
         """Blanket rate (m/s) of level A at height za, given the stack's base blanket rate."""
@@ -49,9 +52,8 @@ class OxideStack:
     def __init__(self, process):
         self.p = process
 
-    def levels(self, density, width):
-        with np.errstate(divide="ignore", invalid="ignore"):
-            gap = np.where(density > 0, width * (1.0 - density) / density, np.nan)  # the spaces
+    def levels(self, density, width, space):
+        gap = np.asarray(space, dtype=float)  # the spaces between the lines
         return density, True, gap, np.zeros(density.shape), np.full(density.shape, -self.p.step_height)
 
     def field_rate(self, za, rate):
@@ -81,7 +83,7 @@ class CopperStack:
     def __init__(self, process):
         self.p = process
 
-    def levels(self, density, width):
+    def levels(self, density, width, space):
         p = self.p
         top = p.barrier_thickness + p.copper_thickness
         closed = ~(np.isfinite(width) & (width > 2.0 * p.copper_thickness))

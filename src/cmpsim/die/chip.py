@@ -1,0 +1,288 @@
+"""The die model on real layouts: per-window fields, stacks of levels, and one call per re-simulation.
+
+A real layout (GDSII/OASIS) is turned into windows by :mod:`cmpsim.layout` (density, line width
+and line space of the merged shapes of the chosen layers in every window); the die is then those
+windows, each with its own fields (:meth:`cmpsim.die.layout.Layout.from_windows`): no regions are
+looked for, the per-window maps are the result. The evolution is the one of every die
+(:class:`cmpsim.die.evolution.DieEvolution`, vectorised over cells), the effective density the
+planarization-length weighting over the whole chip (periodic: the die is stepped), the blanket
+rate the wafer solve's.
+
+* :class:`DieModel`: everything that does not depend on the layout's fields (one wafer solve per
+  film, the weighting, the pad's feature contact), and :meth:`DieModel.run` polishing a die of
+  given fields: the call to re-simulate a die with other densities (e.g. with fill), at the cost
+  of one FFT and one evolution (about a second for 120,000 windows).
+* :func:`layout_die`: the die of a layout file's layers.
+* :func:`read_stack`, :func:`simulate_stack`: an ordered list of levels, the topography left by
+  one the incoming topography of the next (docs/model.md, section 18.10).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .layout import Layout
+from .polish import DieResult, _config, _conventions, _feature, _polish, _weighting
+from .process import DIE_PARAMETERS, PROCESSES, DieProcess
+from .stacks import film_stack
+
+__all__ = ["DieModel", "layout_die", "is_layout_file", "StackLevel", "StackResult", "read_stack", "simulate_stack"]
+
+_MAGIC = (b"\x00\x06\x00\x02", b"%SEMI-OASIS\r\n", b"\x1f\x8b")
+LAYOUT_SUFFIXES = (".gds", ".gds.gz", ".oas", ".gdsii", ".gds2")
+
+
+def is_layout_file(path) -> bool:
+    """Whether ``path`` names a GDSII/OASIS layout: by its suffix, or by its first bytes."""
+    name = str(path).lower()
+    if name.endswith(LAYOUT_SUFFIXES):
+        return True
+    p = Path(path)
+    if not p.is_file():
+        return False
+    with open(p, "rb") as fh:
+        head = fh.read(16)
+    return any(head.startswith(m) for m in _MAGIC)
+
+
+def layout_die(layout, layers, window: float = 20e-6, *, top: str | None = None, pdk: str | None = None, layer_map=None,
+               origin=None) -> Layout:
+    """The die of a layout's layers (:func:`cmpsim.layout.extract_windows`: .gds, .gds.gz, .oas), one cell per window.
+
+    ``layout`` is a path or a :class:`cmpsim.layout.Layout` already read. ValueError (naming the
+    parameter) for a file that is not a layout, a layer it lacks, an empty layer, a window
+    larger than the die.
+    """
+    from ..layout import extract_windows
+
+    if isinstance(layers, tuple) and all(isinstance(x, str) for x in layers):
+        layers = list(layers)  # a tuple of names, not a (layer, datatype) pair
+    try:
+        w = extract_windows(layout, layers, window, top=top, pdk=pdk, layer_map=layer_map, origin=origin)
+    except FileNotFoundError as exc:
+        raise ValueError(str(exc)) from None
+    return Layout.from_windows(w)
+
+
+def _as_layout(layout) -> Layout:
+    if isinstance(layout, Layout):
+        return layout
+    if hasattr(layout, "density") and hasattr(layout, "window"):  # cmpsim.layout.LayoutWindows
+        return Layout.from_windows(layout)
+    raise TypeError(f"expected a cmpsim.die.layout.Layout or a cmpsim.layout.LayoutWindows; got {type(layout).__name__}")
+
+
+class DieModel:
+    """A die model ready to polish dies of any fields: the wafer solve, the weighting and the pad's feature contact, computed once.
+
+    ``process`` is a :class:`DieProcess` or ``"oxide"``/``"copper"`` (keywords set its inputs with
+    units); ``blanket_rate`` (m/s) defaults to the wafer-mean rate of ``cmpsim.solve(config)`` for the
+    process's film (solved once, at construction); ``spec`` the hotspot limits. Other arguments
+    as :func:`cmpsim.die.simulate`.
+    """
+
+    def __init__(self, config=None, process="oxide", *, blanket_rate: float | None = None, planarization_length: float | None = None,
+                 weighting: str = "gaussian", feature_contact: str = "elastic", spec=None, **process_values):
+        from .hotspots import parse_spec
+
+        config = _config(config)
+        if process is None or isinstance(process, str):
+            process = DieProcess.from_values(process or "oxide", **process_values)
+        elif process_values:
+            raise ValueError("give the die inputs either as a DieProcess or as keywords, not both")
+        film = film_stack(process).film
+        if getattr(config, "film", film) != film:
+            config = config.replace(film=film)
+        self.config, self.process, self.weighting, self.feature_contact = config, process, weighting, feature_contact
+        self.spec = parse_spec(spec)
+        self.weight, self.derived = _weighting(config, planarization_length, weighting)
+        self.feature = _feature(config, feature_contact)
+        self.conventions = _conventions(config)
+        if blanket_rate is None:
+            from ..solver.model import solve
+
+            blanket_rate = float(solve(config, relative=False).removal_rate_mean)
+        if not (math.isfinite(blanket_rate) and blanket_rate > 0):
+            raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
+        self.blanket_rate = float(blanket_rate)
+
+    def run(self, layout, time: float | None = None, *, density=None, width=None, space=None, incoming=None,
+            level: str | None = None) -> DieResult:
+        """Polish a die: ``layout`` a die :class:`Layout` or a :class:`cmpsim.layout.LayoutWindows`.
+
+        ``density``, ``width``, ``space`` ((ny, nx) arrays; width and space in m) replace the
+        layout's fields (a die with fill: its new density, and the width and space of the
+        merged drawn + fill shapes); ``incoming`` = (height, step) the topography a level below
+        left (m); ``time`` (s) defaults to the end point x (1 + over_polish). Returns a
+        :class:`DieResult` whose per-window maps are ``evolution.thickness``, ``.step_height``,
+        ``.dishing``, ``.erosion``, with ``thickness_range`` and ``hotspots()``.
+        """
+        from .density import effective_density
+
+        lay = _as_layout(layout)
+        if density is not None or width is not None or space is not None:
+            lay = lay.with_fields(density, width, space)
+        if time is not None and not (math.isfinite(time) and time >= 0):
+            raise ValueError(f"time must be >= 0 s; got {time!r}")
+        eff = effective_density(lay.density, lay.cell_size, self.weight)
+        template = DieResult(lay, self.process, 0.0, self.blanket_rate, self.weight.length, self.derived, self.weighting, eff, None,
+                             self.conventions, self.feature_contact, dict(self.spec), level)
+        return _polish(lay, self.process, self.config, self.blanket_rate, time, eff, self.feature, incoming, template)
+
+
+# ------------------------------------------------------------------------------ stacks
+@dataclass(frozen=True)
+class StackLevel:
+    """One level of a stack: its name, the layers whose shapes make it, its process (film stack and thicknesses)."""
+
+    name: str
+    layers: tuple
+    process: DieProcess
+
+
+@dataclass
+class StackResult:
+    """Every level of a stack, bottom first, each polished over the topography the one below left."""
+
+    levels: list
+    spec: dict = field(default_factory=dict)
+
+    @property
+    def top(self) -> DieResult:
+        return self.levels[-1]
+
+    def hotspots(self) -> list[dict]:
+        return [h for lv in self.levels for h in lv.hotspots()]
+
+    def to_dict(self) -> dict:
+        """The JSON of ``cmpsim die --stack``: ``levels`` [{``name``, the keys of a single-level run}], the hotspots of all levels,
+        ``hotspot_count`` and ``thickness_range`` (that of the last level: the final surface of the stack)."""
+        from .hotspots import public
+
+        levels = [{"name": lv.level, **lv.to_dict()} for lv in self.levels]
+        hot = public(self.hotspots())
+        return {"layout": self.top.layout.name, "levels": levels, "spec": dict(self.spec), "hotspot_count": len(hot), "hotspots": hot,
+                "thickness_range": self.top.thickness_range, "units": levels[-1]["units"] | {"thickness_range": "m"}}
+
+    def dataset(self):
+        """The per-window maps of every level as one ``xarray.Dataset`` on (level, y, x)."""
+        import xarray as xr
+
+        ds = xr.concat([lv.dataset() for lv in self.levels], dim="level", data_vars="all", coords="minimal", compat="override",
+                       join="override")
+        ds = ds.assign_coords(level=("level", [lv.level for lv in self.levels], {"long_name": "level of the stack, bottom first"}))
+        ds.attrs["title"] = f"cmpsim die --stack: {self.top.layout.name}, levels " + ", ".join(lv.level for lv in self.levels)
+        return ds
+
+
+_STACK_KEYS = {"window", "pdk", "layer_map", "top", "spec", "level"}
+_LEVEL_KEYS = {"name", "layers", "process", "spec"}
+
+
+def read_stack(path) -> tuple[list[StackLevel], dict]:
+    """Read a stack file (TOML): ``[[level]]`` tables with ``name``, ``layers``, ``process`` (oxide|copper) and its inputs.
+
+    Returns (levels, options): options may hold ``window``, ``pdk``, ``layer_map``, ``top`` and
+    ``spec`` (a table kind = "5 nm"). ValueError naming the file, the level and the key for
+    anything unknown (an unknown process, an unknown input) or missing.
+    """
+    import tomllib
+
+    p = Path(path)
+    if not p.is_file():
+        raise ValueError(f"--stack {str(p)!r} is not a file")
+    try:
+        data = tomllib.loads(p.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"--stack {p.name} is not valid TOML: {exc}") from None
+    unknown = set(data) - _STACK_KEYS
+    if unknown:
+        raise ValueError(f"--stack {p.name}: unknown key(s) {sorted(unknown)}; valid: {sorted(_STACK_KEYS)}")
+    raw = data.get("level")
+    if not isinstance(raw, list) or not raw:
+        raise ValueError(f"--stack {p.name} has no [[level]] tables (each with name, layers, process)")
+    levels, names = [], set()
+    for i, lv in enumerate(raw):
+        where = f"--stack {p.name}, level {i + 1}"
+        for key in ("name", "layers", "process"):
+            if key not in lv:
+                raise ValueError(f"{where}: missing {key!r} (each [[level]] needs name, layers, process)")
+        name = str(lv["name"])
+        if name in names:
+            raise ValueError(f"{where}: the name {name!r} is used twice")
+        names.add(name)
+        if lv["process"] not in PROCESSES:
+            raise ValueError(f"{where} ({name}): unknown process {lv['process']!r}; valid: {', '.join(PROCESSES)}")
+        layers = lv["layers"]
+        if isinstance(layers, str):
+            layers = [layers]
+        if not isinstance(layers, list) or not layers or not all(isinstance(x, str) for x in layers):
+            raise ValueError(f"{where} ({name}): layers must be a list of \"L/D\" or layer names, got {lv['layers']!r}")
+        inputs = {k: v for k, v in lv.items() if k not in _LEVEL_KEYS}
+        bad = set(inputs) - set(DIE_PARAMETERS)
+        if bad:
+            raise ValueError(f"{where} ({name}): unknown input(s) {sorted(bad)}; valid: {', '.join(DIE_PARAMETERS)}")
+        if "spec" in lv:
+            raise ValueError(f"{where} ({name}): give the limits once, in a top-level [spec] table")
+        try:
+            process = DieProcess.from_values(lv["process"], **inputs)
+        except ValueError as exc:
+            raise ValueError(f"{where} ({name}): {exc}") from None
+        levels.append(StackLevel(name, tuple(layers), process))
+    options = {k: data[k] for k in ("window", "pdk", "layer_map", "top", "spec") if k in data}
+    if "layer_map" in options and not Path(options["layer_map"]).is_absolute():
+        options["layer_map"] = str(p.parent / options["layer_map"])  # relative to the stack file
+    if "spec" in options and not isinstance(options["spec"], dict):
+        raise ValueError(f"--stack {p.name}: [spec] must be a table, e.g. thickness = \"5 nm\"")
+    return levels, options
+
+
+def simulate_stack(layout, levels, window: float | None = None, *, top: str | None = None, pdk: str | None = None, layer_map=None,
+                   config=None, blanket_rate: float | None = None, time: float | None = None, spec=None,
+                   planarization_length: float | None = None, weighting: str = "gaussian", feature_contact: str = "elastic") -> StackResult:
+    """Polish the levels of a stack bottom first (docs/model.md, section 18.10).
+
+    ``layout`` is a layout path or a :class:`cmpsim.layout.Layout`, ``levels`` a list of
+    :class:`StackLevel` (or a stack file, :func:`read_stack`, whose ``window``, ``pdk``,
+    ``layer_map``, ``top`` and ``spec`` apply where not given here). Every level is extracted on
+    the same window grid; each is polished over the topography the level below left
+    (:meth:`cmpsim.die.evolution.DieEvolution.topography`). The wafer is solved once per film.
+    """
+    from ..layout import read_layout
+    from ..inputs.units import to_si
+    from .hotspots import parse_spec
+
+    spec = parse_spec(spec)
+    if isinstance(levels, (str, os.PathLike)):
+        levels, options = read_stack(levels)
+        if window is None and "window" in options:
+            window = to_si(options["window"], "m", "window", "20 um")
+        pdk = pdk or options.get("pdk")
+        layer_map = layer_map or options.get("layer_map")
+        top = top or options.get("top")
+        spec = parse_spec(options.get("spec")) | spec
+    if window is None:
+        window = 20e-6
+    if isinstance(layout, (str, os.PathLike)):
+        try:
+            layout = read_layout(layout)
+        except FileNotFoundError as exc:
+            raise ValueError(str(exc)) from None
+    dies = [layout_die(layout, lv.layers, window, top=top, pdk=pdk, layer_map=layer_map) for lv in levels]
+    config = _config(config)
+    rates: dict[str, float] = {}
+    out, incoming = [], None
+    for lv, lay in zip(levels, dies):
+        film = film_stack(lv.process).film
+        model = DieModel(config, lv.process, blanket_rate=blanket_rate if blanket_rate is not None else rates.get(film),
+                         planarization_length=planarization_length, weighting=weighting, feature_contact=feature_contact, spec=spec)
+        rates[film] = model.blanket_rate
+        res = model.run(lay, time, incoming=incoming, level=lv.name)
+        out.append(res)
+        incoming = res.evolution.topography()
+    return StackResult(out, dict(spec))
