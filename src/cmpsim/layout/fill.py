@@ -488,8 +488,9 @@ def write_fill(path: str | os.PathLike, sites: FillSites, chosen: np.ndarray, la
             if len(offs) == 1:
                 top.add(gdstk.Reference(pc, tuple(offs[0])))
             else:
-                ref = gdstk.Reference(pc, (0, 0))
-                ref.repetition = gdstk.Repetition(offsets=[tuple(o) for o in offs])
+                # an explicit repetition holds the origin implicitly: the offsets are of the other copies
+                ref = gdstk.Reference(pc, tuple(offs[0]))
+                ref.repetition = gdstk.Repetition(offsets=[tuple(o) for o in offs[1:] - offs[0]])
                 top.add(ref)
     tmp = path.with_name(path.name + ".tmp" + suffix)
     if suffix == ".gds":
