@@ -89,6 +89,9 @@ def main(argv=None) -> int:
     ap.add_argument("--layer", default="68/20")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--iterations", type=int, default=3)
+    ap.add_argument("--planarization-length", type=float, default=None, help="m (default: derived from the pad)")
+    ap.add_argument("--weighting", default="gaussian")
+    ap.add_argument("--no-check", action="store_true", help="skip the keep-out check (slow)")
     a = ap.parse_args(argv)
     if not a.macro.is_file():
         print(f"macro {a.macro} not found (give --macro)", file=sys.stderr)
@@ -113,7 +116,8 @@ def main(argv=None) -> int:
     rate = float(solve(Config.default(), relative=False).removal_rate_mean)
     times["wafer_solve"] = time.perf_counter() - t
     t = time.perf_counter()
-    plan = plan_fill(w, s, blanket_rate=rate, iterations=a.iterations)
+    plan = plan_fill(w, s, blanket_rate=rate, iterations=a.iterations, planarization_length=a.planarization_length,
+                     weighting=a.weighting)
     times["plan_fill"] = time.perf_counter() - t
     t = time.perf_counter()
     write_fill(out / "fill.oas", s, plan.chosen, "36/28")
@@ -122,13 +126,13 @@ def main(argv=None) -> int:
     write_fill(out / "fill.gds", s, plan.chosen, "36/28")
     times["write_gds"] = time.perf_counter() - t
     t = time.perf_counter()
-    bad, checked = check_overlap(path, out / "fill.oas", layer, rules.keepout, w, s, plan, s.dbu)
+    bad, checked = (0.0, 0) if a.no_check else check_overlap(path, out / "fill.oas", layer, rules.keepout, w, s, plan, s.dbu)
     times["check"] = time.perf_counter() - t
     d = plan.to_dict()
     b, f = d["before"], d["after"]
     cut = 1.0 - f["thickness_range"] / b["thickness_range"]
     report = {
-        "die": "10 x 10 mm", "windows": list(w.density.shape), "window": a.window, "rules": rules.source,
+        "die": "10 x 10 mm", "planarization_length": plan.before.planarization_length, "weighting": a.weighting, "windows": list(w.density.shape), "window": a.window, "rules": rules.source,
         "mean_density_before": float(w.density.mean()), "mean_density_after": float(plan.windows.density.mean()),
         "fill": d, "thickness_range_cut": cut, "squares": int(plan.counts.sum()),
         "overlap_area_dbu2": bad, "windows_checked": checked, "sites": s.stats, "plan": plan.stats,

@@ -216,6 +216,8 @@ def test_bad_inputs(chip, tmp_path):
         fill_sites(path, ["68/20"], w, FillRules(15 * UM, 6 * UM, 1 * UM))
     with pytest.raises(ValueError, match="database units"):
         fill_sites(path, ["68/20"], w, FillRules(2.0005 * UM, 1 * UM, 1 * UM))
+    with pytest.raises(ValueError, match="not in chip.gds"):
+        fill_sites(path, ["70/20"], w, RULES)
     chosen = select_fill(s, s.capacity)
     with pytest.raises(ValueError, match="L/D"):
         write_fill(tmp_path / "f.gds", s, chosen, "met1")

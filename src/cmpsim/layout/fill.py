@@ -342,7 +342,8 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
     """The free fill sites of every window of ``windows`` (the grid of :func:`extract_windows`).
 
     ``layers`` are the drawn layers the fill must keep ``rules.keepout`` away from (the same
-    specs as :func:`extract_windows`; pairs the file lacks are skipped). The window side
+    specs as :func:`extract_windows`; pairs the file lacks are skipped, none of them present is an
+    error). The window side
     must hold at least one pitch. Cost: one pass over the rectangles of every placement.
     """
     import time
@@ -355,6 +356,11 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
     groups = resolve_layers(layers, pdk=pdk, layer_map=layer_map)
     present = layers_in(layout)
     pairs = {p for g in groups for p in g if p in present}
+    if not pairs:
+        want = ", ".join(f"{l}/{d}" for g in groups for l, d in g)
+        listing = ", ".join(f"{l}/{d}" for l, d in sorted(present))
+        raise ValueError(f"layers {want} are not in {layout.path.name}: fill would ignore every drawn shape; "
+                         f"its layers are: {listing}")
     W = _dbu(windows.window, dbu, "window")
     s = _dbu(rules.size, dbu, "fill size")
     g = _dbu(rules.spacing, dbu, "fill spacing")
@@ -388,8 +394,7 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
         np.add.at(diff, (y1, x1), 1)
 
     engine = _CellRects(layout.library, pairs, flat_limit=flat_limit)
-    if pairs:
-        engine.walk(cell.name, visit)
+    engine.walk(cell.name, visit)
     blocked = np.cumsum(np.cumsum(diff, axis=0), axis=1)[:-1, :-1] > 0
     (bx0, by0), (bx1, by1) = np.round(cell.bounding_box())
     inside_x = (lx >= bx0 + e) & (lx + s <= bx1 - e)
