@@ -29,7 +29,7 @@ def test_copper_and_oxide_repeat_cmpsim_materials():
     """The physics kernels import nothing of cmpsim; the test checks the repeated values agree."""
     from cmpsim.physics.materials import FILMS
 
-    for ours, theirs in ((COPPER, FILMS["copper"]), (OXIDE, FILMS["oxide"])):
+    for ours, theirs in ((COPPER, FILMS["copper"]), (OXIDE, FILMS["oxide"]), (TANTALUM, FILMS["barrier"])):
         assert (ours.modulus, ours.poisson, ours.hardness) == (theirs.modulus, theirs.poisson, theirs.hardness)
 
 

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 from ._version import __version__
 
-__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "tune_zones", "EquilibriumError", "__version__"]
+__all__ = ["Config", "Result", "solve", "sweep", "reproduce", "validate", "calibrate", "tune_zones", "polish", "EquilibriumError", "__version__"]
 
 _LAZY = {
     "Config": ("cmpsim.inputs.config", "Config"),
@@ -32,6 +32,7 @@ _LAZY = {
     "validate": ("cmpsim.validation", "validate"),
     "calibrate": ("cmpsim.calibration", "calibrate"),
     "tune_zones": ("cmpsim.head.tuning", "tune_zones"),
+    "polish": ("cmpsim.polisher.engine", "polish"),
     "die": ("cmpsim.die", None),  # the chip-scale model, a package: cmpsim.die.simulate(...)
 }
 

@@ -1,4 +1,4 @@
-"""Command line: ``cmpsim run | params | sweep | reproduce | validate | calibrate | tune-zones | serve | die``.
+"""Command line: ``cmpsim run | params | sweep | reproduce | validate | calibrate | tune-zones | polish | serve | die``.
 
 A thin layer over the Python API: every command calls the function of the same name.
 Bad input exits with status 2 and a message naming the parameter and its valid range;
@@ -16,12 +16,13 @@ The group and what the commands share live in :mod:`cmpsim.cli.group`, the input
 
 from __future__ import annotations
 
-from . import calibrate, die, point, reproduce, serve, sweep, tune_zones, validate  # noqa: F401 - each registers its command on main
+from . import calibrate, die, point, polish, reproduce, serve, sweep, tune_zones, validate  # noqa: F401 - each registers its command on main
 from .calibrate import _ListOptionsCommand, _split_names, calibrate_command
 from .die import die_command
 from .group import _PACKAGE, EXIT_INPUT, EXIT_NO_EQUILIBRIUM, _fail, _rich_table, _warn, main, show_warning
 from .inputs import PRESET_NAMES, config_options, load_config, params, parse_assignments
 from .point import run, write_outputs
+from .polish import polish_command
 from .reproduce import reproduce_command
 from .serve import serve_command
 from .sweep import sweep_command
@@ -45,6 +46,7 @@ __all__ = [
     "validate_command",
     "calibrate_command",
     "tune_zones_command",
+    "polish_command",
     "serve_command",
     "die_command",
 ]

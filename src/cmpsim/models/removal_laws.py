@@ -117,24 +117,28 @@ def abrasive_contact(config) -> AbrasiveContact:
 class TwoStepKinetics:
     """A thermally activated chemical step in series with the mechanical rate (:mod:`cmpsim.physics.kinetics`).
 
-    RR = RR_c RR_m / (RR_c + RR_m), RR_c = c_0 exp(-(E_a/R_g)(1/T - 1/T_0)), T = T_0 + beta mu p_c |du|.
+    RR = RR_c RR_m / (RR_c + RR_m), RR_c = c_0 exp(-(E_a/R_g)(1/T - 1/T_0)), T = T_pad + beta mu p_c |du|
+    (T_pad = ``pad_temperature``, T_0 = ``slurry_temperature`` when it is 0).
     """
 
-    def __init__(self, reference_rate: float, activation_energy: float, heating_coefficient: float, temperature: float, friction_coefficient: float):
+    def __init__(self, reference_rate: float, activation_energy: float, heating_coefficient: float, temperature: float, friction_coefficient: float,
+                 pad_temperature: float | None = None):
         self.reference_rate = reference_rate
         self.activation_energy = activation_energy
         self.heating_coefficient = heating_coefficient
-        self.temperature = temperature
+        self.temperature = temperature  # T_0: the reference temperature of reference_rate (slurry_temperature)
         self.friction_coefficient = friction_coefficient
+        # the base of the flash temperature: the pad's surface (cmpsim polish sets it through time), else T_0
+        self.pad_temperature = temperature if not pad_temperature else pad_temperature
 
     @classmethod
     def from_config(cls, config) -> "TwoStepKinetics":
         c = config
-        return cls(c.chemical_rate, c.activation_energy, c.flash_heating_coefficient, c.slurry_temperature, c.friction_coefficient)
+        return cls(c.chemical_rate, c.activation_energy, c.flash_heating_coefficient, c.slurry_temperature, c.friction_coefficient, c.pad_temperature)
 
     def rate(self, mechanical, contact_pressure, relative_speed) -> np.ndarray:
-        """The two-step rate, m/s, from the mechanical rate (m/s) and the local friction power."""
-        t = flash_temperature(self.temperature, self.friction_coefficient, contact_pressure, relative_speed, self.heating_coefficient)
+        """The two-step rate, m/s, from the mechanical rate (m/s) and the local friction power on a pad at ``pad_temperature``."""
+        t = flash_temperature(self.pad_temperature, self.friction_coefficient, contact_pressure, relative_speed, self.heating_coefficient)
         return series_rate(chemical_rate(t, self.reference_rate, self.activation_energy, self.temperature), mechanical)
 
 

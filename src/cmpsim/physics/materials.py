@@ -2,7 +2,7 @@
 
 Pure data and kernels (SI units): the abrasives (``silica``, ``ceria``, ``alumina``) with their
 density, Young's modulus, Poisson ratio and hardness; the films (``oxide``, ``copper``,
-``tungsten``) with their modulus, Poisson ratio and hardness; the conversion of a solids
+``tungsten``, ``barrier``) with their modulus, Poisson ratio and hardness; the conversion of a solids
 loading (mass fraction) into a solid volume fraction and a bulk grain density; and the
 Krieger–Dougherty viscosity of a hard-sphere suspension. Every number carries its source
 (``docs/model.md``, "Abrasive removal"); the least certain ones say so.
@@ -72,6 +72,7 @@ FILMS: dict[str, Material] = {r[0]: Material(*r) for r in (
     ('oxide', 0.0, 72000000000.0, 0.17, 9000000000.0, 'Silicon dioxide (thermal oxide as fused silica: Oliver & Pharr, J. Mater. Res. 7, 1564 (1992), E = 72 GPa, nu = 0.17, H about 9 GPa); PECVD TEOS films are somewhat softer (6-8 GPa)'),
     ('copper', 0.0, 128000000000.0, 0.34, 1500000000.0, 'Polycrystalline copper: E = 128 GPa, nu = 0.34 (CRC Handbook); H = 1.5 GPa, the middle of the 1-2 GPa that nanoindentation gives for sputtered and electroplated films (film hardness exceeds the bulk 0.4-0.9 GPa; Nix, Metall. Trans. A 20, 2217 (1989))'),
     ('tungsten', 0.0, 411000000000.0, 0.28, 6000000000.0, 'Tungsten: E = 411 GPa, nu = 0.28 (CRC Handbook); H = 6 GPa for CVD films (bulk Vickers 3.4-4.5 GPa; thin films harder): order of magnitude, second-hand'),
+    ('barrier', 0.0, 180000000000.0, 0.34, 15600000000.0, 'Tantalum barrier film (Ta; the barrier of cmpsim.physics.films): E = 180 GPa, H = 15.6 GPa by nanoindentation of a sputtered Ta film (J. Nanomater. 2013, 154179, read in a transcription: verify), nu = 0.34 of bulk tantalum (CRC Handbook). TaN is harder (epitaxial 457 GPa / 30.8 GPa, Appl. Phys. Lett. 75, 3808 (1999)): cmpsim.physics.films.TANTALUM_NITRIDE'),
 )}
 
 

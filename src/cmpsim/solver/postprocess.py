@@ -19,7 +19,7 @@ from .setup import PhysicalSetup
 from ..operators.state import EquilibriumSolution
 from .wafer import WaferProblem
 
-__all__ = ["evaluate_outputs", "reduce_outputs"]
+__all__ = ["evaluate_outputs", "reduce_outputs", "stress_fields", "removal_law_fields"]
 
 
 def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem, sol: EquilibriumSolution):
@@ -29,35 +29,10 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     """
     st = sol.state
     g = problem.grid
-    lub = setup.lubrication
-    xc, yc = problem.xc, problem.yc
-    # shear stress and removal rate
-    _, _, dux, duy = setup.kinematics.mean_and_relative(xc, yc)
-    ar = st.area_ratio
-    slurry = problem.slurry
-    # the slurry's shear on the wafer and the normal stress the removal law sees (for a
-    # Newtonian slurry the compressive part of the gauge pressure; docs/model.md)
-    tsx, tsy = slurry.shear_stress(st, g, lub, (dux, duy))
-    p_normal = slurry.normal_pressure(st.p_slurry)
-    tau_x = (1.0 - ar) * tsx
-    tau_y = (1.0 - ar) * tsy
-    if config.removal_shear == "total":
-        tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
-        tau_x, tau_y = tau_x + tcx, tau_y + tcy
-    tau = np.hypot(tau_x, tau_y)
-    sigma_n = (1.0 - ar) * p_normal + st.p_contact
-    # the removal law takes the fields it names (cmpsim.models.removal_laws.REMOVAL_FIELDS)
+    f = stress_fields(config, problem, st, setup.kinematics, setup.lubrication)
+    tau, sigma_n, p_normal = f["shear_stress_magnitude"], f["normal_stress"], f["granular_pressure"]
     law = setup.removal_law or _removal_law(config)
-    fields = {
-        "normal_stress": lambda: sigma_n,
-        "shear_stress": lambda: (tau_x, tau_y),
-        "contact_pressure": lambda: st.p_contact,
-        "fluid_shear_stress": lambda: ((1.0 - ar) * tsx, (1.0 - ar) * tsy),
-        "relative_speed": lambda: np.hypot(dux, duy),
-        "contact_area_ratio": lambda: ar,
-        "film_thickness": lambda: st.h,
-        "contact_spot_density": lambda: contact_spot_density(st.h - problem.separation_offset, problem.pad),
-    }
+    fields = removal_law_fields(f, st, problem)
     rr = law.rate(**{name: fields[name]() for name in law.needs})
     # film thickness: centre, and minimum over the cell centres and the rim
     u = st.u
@@ -89,7 +64,7 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
         "attack_angle": float(u[1]),
         "cross_tilt": float(u[2]),
         # the slurry pressure at the wafer edge: p0 (granular), ambient = 0 gauge (Newtonian)
-        "ambient_pressure": slurry.edge_pressure(setup.ambient_pressure),
+        "ambient_pressure": problem.slurry.edge_pressure(setup.ambient_pressure),
         "sliding_speed": setup.kinematics.sliding_speed,
         "load_residual": float(st.residual[0]),
         "moment_residual": float(max(abs(st.residual[1]), abs(st.residual[2]))),
@@ -101,6 +76,55 @@ def evaluate_outputs(config: Config, setup: PhysicalSetup, problem: WaferProblem
     scalars, profiles = reduce_outputs(polar, g, problem.load_scale, config.edge_exclusion, explicit)
     return scalars, polar, profiles
 
+
+
+def stress_fields(config: Config, problem: WaferProblem, state, kinematics, lubrication) -> dict:
+    """The stresses on the wafer of a solved state (arrays on the cell centres, SI).
+
+    ``relative_velocity`` (dux, duy) m/s, ``shear_stress`` (tau_x, tau_y) Pa (slurry plus summit
+    friction with ``removal_shear = "total"``), ``shear_stress_magnitude``, ``fluid_shear_stress``,
+    ``granular_pressure`` (the normal stress the slurry puts on the removal law) and
+    ``normal_stress``, Pa. Shared by :func:`evaluate_outputs` and the studies that evaluate a
+    removal law again on a solved equilibrium (``cmpsim.polisher``).
+    """
+    st = state
+    _, _, dux, duy = kinematics.mean_and_relative(problem.xc, problem.yc)
+    ar = st.area_ratio
+    slurry = problem.slurry
+    # the slurry's shear on the wafer and the normal stress the removal law sees (for a
+    # Newtonian slurry the compressive part of the gauge pressure; docs/model.md)
+    tsx, tsy = slurry.shear_stress(st, problem.grid, lubrication, (dux, duy))
+    p_normal = slurry.normal_pressure(st.p_slurry)
+    tau_x = (1.0 - ar) * tsx
+    tau_y = (1.0 - ar) * tsy
+    if config.removal_shear == "total":
+        tcx, tcy = contact_shear_stress(st.p_contact, (dux, duy), config.friction_coefficient)
+        tau_x, tau_y = tau_x + tcx, tau_y + tcy
+    return {
+        "relative_velocity": (dux, duy),
+        "shear_stress": (tau_x, tau_y),
+        "shear_stress_magnitude": np.hypot(tau_x, tau_y),
+        "fluid_shear_stress": ((1.0 - ar) * tsx, (1.0 - ar) * tsy),
+        "granular_pressure": p_normal,
+        "normal_stress": (1.0 - ar) * p_normal + st.p_contact,
+    }
+
+
+def removal_law_fields(stresses: dict, state, problem: WaferProblem) -> dict:
+    """The fields a removal law may ask for (:data:`cmpsim.models.removal_laws.REMOVAL_FIELDS`), as
+    callables (evaluated only if the law ``needs`` them), from :func:`stress_fields` and the state."""
+    st = state
+    dux, duy = stresses["relative_velocity"]
+    return {
+        "normal_stress": lambda: stresses["normal_stress"],
+        "shear_stress": lambda: stresses["shear_stress"],
+        "contact_pressure": lambda: st.p_contact,
+        "fluid_shear_stress": lambda: stresses["fluid_shear_stress"],
+        "relative_speed": lambda: np.hypot(dux, duy),
+        "contact_area_ratio": lambda: st.area_ratio,
+        "film_thickness": lambda: st.h,
+        "contact_spot_density": lambda: contact_spot_density(st.h - problem.separation_offset, problem.pad),
+    }
 
 def reduce_outputs(polar: dict, grid, load: float, edge_exclusion: float, explicit: dict):
     """The scalars and profiles of the registry (:mod:`cmpsim.results.outputs`) from the polar fields.
