@@ -1,0 +1,316 @@
+"""Dummy fill: the rules, the free sites (never within the keep-out of a drawn shape, and only
+those), spacing, the window fields after fill against re-extraction, the GDS/OASIS files, and
+the model-based choice on a synthetic 10 x 10 mm floorplan of dense and sparse blocks. The
+layouts are built here with gdstk (nothing outside the suite)."""
+
+from __future__ import annotations
+
+import math
+
+import gdstk
+import numpy as np
+import pytest
+
+from cmpsim.die.fill import DEFAULT_LIMITS, die_layout, hotspot_count, plan_fill, thickness, thickness_range
+from cmpsim.die.polish import simulate
+from cmpsim.layout import extract_windows, read_layout, top_cell
+from cmpsim.layout.fill import (FILL_RULES, FillRules, fill_polygons, fill_rules, fill_sites, filled_windows,
+                                select_fill, write_fill)
+
+UM = 1e-6
+NM = 1000  # dbu per um (1 nm database unit)
+RATE = 2e-9  # blanket rate (m/s): no wafer solve in the suite's die runs
+
+
+# ------------------------------------------------------------------------------ layouts
+def small_chip(path):
+    """A 200 x 160 um chip: rectangles, an L, a polygon with a notch, a 45-degree shape, a path,
+    a child cell placed rotated, mirrored and as an array."""
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    child = lib.new_cell("CHILD")
+    child.add(gdstk.rectangle((0, 0), (6 * NM, 1 * NM), layer=68, datatype=20))
+    child.add(gdstk.rectangle((0, 0), (1 * NM, 9 * NM), layer=68, datatype=20))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (200 * NM, 160 * NM), layer=235, datatype=4))  # the die, no metal
+    top.add(gdstk.rectangle((10 * NM, 10 * NM), (40 * NM, 14 * NM), layer=68, datatype=20))
+    top.add(gdstk.Polygon([(60 * NM, 20 * NM), (90 * NM, 20 * NM), (90 * NM, 25 * NM), (66 * NM, 25 * NM),
+                           (66 * NM, 50 * NM), (60 * NM, 50 * NM)], layer=68, datatype=20))  # an L
+    top.add(gdstk.Polygon([(120 * NM, 10 * NM), (150 * NM, 10 * NM), (150 * NM, 40 * NM), (140 * NM, 40 * NM),
+                           (140 * NM, 20 * NM), (130 * NM, 20 * NM), (130 * NM, 40 * NM), (120 * NM, 40 * NM)],
+                          layer=68, datatype=20))  # a U (a notch to fill into)
+    top.add(gdstk.Polygon([(20 * NM, 100 * NM), (30 * NM, 100 * NM), (50 * NM, 120 * NM), (40 * NM, 120 * NM)],
+                          layer=68, datatype=20))  # 45 degrees
+    top.add(gdstk.FlexPath([(100 * NM, 80 * NM), (180 * NM, 80 * NM)], 2 * NM, layer=68, datatype=20))
+    top.add(gdstk.Reference(child, (170 * NM, 120 * NM), rotation=math.pi / 2))
+    top.add(gdstk.Reference(child, (100 * NM, 130 * NM), x_reflection=True))
+    top.add(gdstk.Reference(child, (60 * NM, 130 * NM), columns=3, rows=2, spacing=(12 * NM, 14 * NM)))
+    top.add(gdstk.rectangle((0, 150 * NM), (3 * NM, 160 * NM), layer=69, datatype=20))  # another layer: no keep-out
+    lib.write_gds(str(path))
+    return path
+
+
+def floorplan(path):
+    """A 10 x 10 mm die: two dense blocks (3 x 3 mm, 2 um lines at 4 um pitch: density 0.5) and one
+    sparse block (2 um lines at 20 um pitch: 0.1), empty space between."""
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    line = lib.new_cell("LINE")
+    line.add(gdstk.rectangle((0, 0), (2 * NM, 3000 * NM), layer=68, datatype=20))
+    dense = lib.new_cell("DENSE")
+    dense.add(gdstk.Reference(line, (0, 0), columns=750, rows=1, spacing=(4 * NM, 0)))
+    sparse = lib.new_cell("SPARSE")
+    sparse.add(gdstk.Reference(line, (0, 0), columns=150, rows=1, spacing=(20 * NM, 0)))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (10000 * NM, 10000 * NM), layer=235, datatype=4))
+    top.add(gdstk.Reference(dense, (1000 * NM, 1000 * NM)))
+    top.add(gdstk.Reference(dense, (6000 * NM, 5500 * NM)))
+    top.add(gdstk.Reference(sparse, (5500 * NM, 1000 * NM)))
+    lib.write_gds(str(path))
+    return path
+
+
+RULES = FillRules(size=2 * UM, spacing=1.5 * UM, keepout=2.5 * UM, edge=1 * UM)
+
+
+@pytest.fixture(scope="module")
+def chip(tmp_path_factory):
+    path = small_chip(tmp_path_factory.mktemp("fill") / "chip.gds")
+    w = extract_windows(path, ["68/20"], 20 * UM)
+    s = fill_sites(path, ["68/20"], w, RULES)
+    return path, w, s
+
+
+def drawn_polygons(path, layer=(68, 20)):
+    cell = top_cell(read_layout(path))
+    return cell.get_polygons(layer=layer[0], datatype=layer[1])
+
+
+def square_boxes(sites, chosen):
+    iy, ix = np.nonzero(chosen)
+    x, y = sites.cx[ix], sites.cy[iy]
+    return np.stack([x, y, x + sites.size, y + sites.size], axis=1)
+
+
+# ------------------------------------------------------------------------------ rules
+def test_rules_per_pdk_and_overrides():
+    for pdk, table in FILL_RULES.items():
+        for name, r in table.items():
+            assert r.size > 0 and r.spacing > 0 and r.keepout > 0, (pdk, name)
+            assert pdk in r.source
+    assert fill_rules("gf180mcu", "metal2") == FILL_RULES["gf180mcu"]["metal2"]
+    r = fill_rules("sg13g2", "metal3", keepout=4 * UM)
+    assert r.keepout == 4 * UM and r.size == FILL_RULES["sg13g2"]["metal3"].size and "overrides" in r.source
+    assert fill_rules("sg13g2", "topmetal1").size == 3 * UM
+    assert fill_rules(None, size=1 * UM, spacing=1 * UM, keepout=1 * UM).pitch == pytest.approx(2 * UM)
+    with pytest.raises(ValueError, match="pdk"):
+        fill_rules("tsmc7")
+    with pytest.raises(ValueError, match="metal9"):
+        fill_rules("gf180mcu", "metal9")
+    with pytest.raises(ValueError, match="keepout"):
+        fill_rules(None, size=1 * UM, spacing=1 * UM)
+    with pytest.raises(ValueError, match="spacing"):
+        FillRules(1 * UM, 0.0, 1 * UM)
+    with pytest.raises(ValueError, match="size"):
+        FillRules(-1.0, 1 * UM, 1 * UM)
+    with pytest.raises(Exception):
+        RULES.size = 1.0  # frozen
+
+
+# ------------------------------------------------------------------------------ geometry
+def test_fill_never_violates_the_keepout(chip):
+    """Every free site filled: fill AND (drawn grown by keep-out - 1 nm) is empty, also around
+    the oblique shape, the path and the rotated, mirrored and arrayed child."""
+    path, w, s = chip
+    chosen = select_fill(s, s.capacity)
+    assert chosen.sum() == s.free.sum() > 500
+    fill = fill_polygons(s, chosen, 36, 28)
+    drawn = drawn_polygons(path)
+    for join in ("miter", "round"):
+        grown = gdstk.offset(drawn, RULES.keepout / 1e-9 - 1.0, join=join, use_union=True)
+        assert gdstk.boolean(fill, grown, "and") == []
+    # ... and stays inside the die by `edge`
+    box = square_boxes(s, chosen)
+    e = RULES.edge / 1e-9
+    assert box[:, 0].min() >= e and box[:, 1].min() >= e
+    assert box[:, 2].max() <= 200 * NM - e and box[:, 3].max() <= 160 * NM - e
+
+
+def test_squares_respect_spacing_and_lie_in_one_window(chip):
+    _, w, s = chip
+    chosen = select_fill(s, s.capacity)
+    b = square_boxes(s, chosen)
+    gap_x = np.maximum(b[:, None, 0] - b[None, :, 2], b[None, :, 0] - b[:, None, 2])
+    gap_y = np.maximum(b[:, None, 1] - b[None, :, 3], b[None, :, 1] - b[:, None, 3])
+    gap = np.maximum(gap_x, gap_y)  # Chebyshev gap between two squares (<= Euclidean)
+    np.fill_diagonal(gap, np.inf)
+    assert gap.min() >= RULES.spacing / 1e-9
+    W = s.window
+    assert np.all(b[:, 0] // W == (b[:, 2] - 1) // W) and np.all(b[:, 1] // W == (b[:, 3] - 1) // W)
+
+
+def test_free_sites_are_exactly_those_outside_the_keepout(chip):
+    """On the Manhattan shapes the blocking is exact: a site is blocked iff its square grown by
+    the keep-out (a box) overlaps a drawn shape with positive area. The 45-degree shape blocks
+    its bounding box (conservative), so sites near it are left out of the comparison."""
+    path, w, s = chip
+    drawn = drawn_polygons(path)
+    k = RULES.keepout / 1e-9
+    e = RULES.edge / 1e-9
+    iy, ix = np.indices(s.free.shape)
+    x, y = s.cx[ix.ravel()], s.cy[iy.ravel()]
+    free = s.free.ravel()
+    inside = (x >= e) & (y >= e) & (x + s.size <= 200 * NM - e) & (y + s.size <= 160 * NM - e)
+    oblique = (x < 50 * NM + k) & (x + s.size > 20 * NM - k) & (y < 120 * NM + k) & (y + s.size > 100 * NM - k)
+    db = np.array([p.bounding_box() for p in drawn]).reshape(-1, 4)
+    checked = 0
+    for i in np.nonzero(inside & ~oblique)[0]:
+        bx = (x[i] - k, y[i] - k, x[i] + s.size + k, y[i] + s.size + k)
+        near = [drawn[j] for j in np.nonzero((db[:, 0] < bx[2]) & (db[:, 2] > bx[0]) & (db[:, 1] < bx[3]) & (db[:, 3] > bx[1]))[0]]
+        area = sum(p.area() for p in gdstk.boolean(near, gdstk.rectangle(bx[:2], bx[2:]), "and")) if near else 0.0
+        assert (area > 1e-6) == (not free[i]), (x[i], y[i], area)
+        checked += 1
+    assert checked > 1500
+    assert not free[~inside].any()
+
+
+def test_filled_windows_equal_reextraction(chip, tmp_path):
+    """The fields after fill (A + n s^2, L + 4 n s per window) equal extract_windows on layout + fill."""
+    path, w, s = chip
+    rng = np.random.default_rng(3)
+    counts = rng.integers(0, s.capacity + 1)
+    chosen = select_fill(s, counts)
+    np.testing.assert_array_equal(chosen.reshape(s.shape[0], s.per_window, s.shape[1], s.per_window).sum(axis=(1, 3)), counts)
+    after = filled_windows(w, s, chosen)
+    lib = read_layout(path).library
+    top = next(c for c in lib.cells if c.name == "TOP")
+    top.add(*fill_polygons(s, chosen, 68, 20))
+    merged = tmp_path / "merged.gds"
+    lib.write_gds(str(merged))
+    ref = extract_windows(merged, ["68/20"], 20 * UM, origin=w.origin)
+    np.testing.assert_allclose(after.density, ref.density, atol=1e-12)
+    np.testing.assert_allclose(after.boundary, ref.boundary, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(after.width, ref.width, rtol=1e-9, atol=1e-15)
+    np.testing.assert_allclose(after.space, ref.space, rtol=1e-9, atol=1e-15)
+
+
+@pytest.mark.parametrize("suffix", [".gds", ".oas"])
+def test_write_fill_round_trip(chip, tmp_path, suffix):
+    _, w, s = chip
+    counts = np.minimum(s.capacity, 5)
+    chosen = select_fill(s, counts)
+    out = write_fill(tmp_path / f"fill{suffix}", s, chosen, "36/28")
+    lay = read_layout(out)
+    cell = top_cell(lay)
+    polys = cell.get_polygons()
+    assert len(polys) == chosen.sum() == counts.sum()
+    assert {(p.layer, p.datatype) for p in polys} == {(36, 28)}
+    got = np.array(sorted(tuple(np.round(p.bounding_box()).ravel()) for p in polys))
+    want = np.array(sorted(map(tuple, square_boxes(s, chosen))))
+    np.testing.assert_array_equal(got, want)
+    assert lay.dbu == pytest.approx(1e-9)
+    assert not list(tmp_path.glob("*.tmp*"))
+
+
+def test_bad_inputs(chip, tmp_path):
+    path, w, s = chip
+    with pytest.raises(ValueError, match="fill pitch"):
+        fill_sites(path, ["68/20"], w, FillRules(15 * UM, 6 * UM, 1 * UM))
+    with pytest.raises(ValueError, match="database units"):
+        fill_sites(path, ["68/20"], w, FillRules(2.0005 * UM, 1 * UM, 1 * UM))
+    with pytest.raises(ValueError, match="not in chip.gds"):
+        fill_sites(path, ["70/20"], w, RULES)
+    chosen = select_fill(s, s.capacity)
+    with pytest.raises(ValueError, match="L/D"):
+        write_fill(tmp_path / "f.gds", s, chosen, "met1")
+    with pytest.raises(ValueError, match=r"\.gds or \.oas"):
+        write_fill(tmp_path / "f.txt", s, chosen, "36/28")
+    w2 = extract_windows(path, ["68/20"], 40 * UM)
+    with pytest.raises(ValueError, match="same grid"):
+        plan_fill(w2, s, blanket_rate=RATE)
+
+
+def test_sites_use_the_hierarchy(tmp_path):
+    """A stepped block is flattened once and visited per placement; the sites equal those of the
+    same chip written flat."""
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    blk = lib.new_cell("BLK")
+    blk.add(gdstk.Reference(lib.new_cell("L").add(gdstk.rectangle((0, 0), (1 * NM, 50 * NM), layer=68, datatype=20)),
+                            (0, 0), columns=10, rows=1, spacing=(5 * NM, 0)))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (400 * NM, 300 * NM), layer=235, datatype=4))
+    top.add(gdstk.Reference(blk, (10 * NM, 10 * NM), columns=4, rows=3, spacing=(95 * NM, 97 * NM)))
+    top.add(gdstk.Reference(blk, (380 * NM, 10 * NM), rotation=math.pi / 2))
+    hier = tmp_path / "hier.gds"
+    lib.write_gds(str(hier))
+    flat_lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    ft = flat_lib.new_cell("TOP")
+    ft.add(*top.get_polygons())
+    flat = tmp_path / "flat.gds"
+    flat_lib.write_gds(str(flat))
+    w = extract_windows(hier, ["68/20"], 25 * UM)
+    a = fill_sites(hier, ["68/20"], w, RULES, flat_limit=50)
+    b = fill_sites(flat, ["68/20"], w, RULES)
+    np.testing.assert_array_equal(a.free, b.free)
+    assert a.stats["placements"] == 13 and a.stats["cells_flattened"] == 2
+
+
+# ------------------------------------------------------------------------------ the model
+@pytest.fixture(scope="module")
+def planned(tmp_path_factory):
+    path = floorplan(tmp_path_factory.mktemp("fill") / "floorplan.gds")
+    w = extract_windows(path, ["68/20"], 100 * UM)
+    rules = FillRules(2 * UM, 2 * UM, 2 * UM)
+    s = fill_sites(path, ["68/20"], w, rules)
+    plan = plan_fill(w, s, blanket_rate=RATE, iterations=2)
+    return path, w, s, plan
+
+
+def test_model_based_fill_cuts_the_thickness_range(planned):
+    path, w, s, plan = planned
+    d = plan.to_dict()
+    b, a = d["before"], d["after"]
+    assert set(b) == set(a) == {"hotspot_count", "thickness_range"}
+    assert a["thickness_range"] <= 0.7 * b["thickness_range"]  # done-when: at least 30 % less
+    assert a["hotspot_count"] < b["hotspot_count"]
+    assert d["added_area"] == pytest.approx(plan.counts.sum() * (2 * UM) ** 2)
+    assert np.all(plan.counts <= s.capacity)
+    assert plan.history == sorted(plan.history, reverse=True)
+    # the after-die is the die model run on the exact window fields after fill
+    again = simulate(die_layout(plan.windows), blanket_rate=RATE)
+    assert thickness_range(again) == pytest.approx(a["thickness_range"], rel=1e-9)
+    # the dense blocks cannot take fill (2 um spaces < keep-out)
+    dense = w.density > 0.45
+    assert plan.counts[dense].sum() == 0
+
+
+def test_model_based_beats_a_flat_density_target(planned):
+    """The same added area spread as a flat density target (each window raised towards one
+    density, as far as its sites allow) leaves a larger thickness range than the model's choice."""
+    path, w, s, plan = planned
+    total = plan.counts.sum()
+    step = s.density_step
+    cap = s.capacity
+
+    def flat(target):
+        return np.minimum(cap, np.floor(np.maximum(target - w.density, 0.0) / step))
+
+    lo, hi = 0.0, 1.0
+    for _ in range(50):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if flat(mid).sum() < total else (lo, mid)
+    counts = flat(hi)
+    res = simulate(die_layout(filled_windows(w, s, select_fill(s, counts))), blanket_rate=RATE)
+    assert thickness_range(res) > plan.to_dict()["after"]["thickness_range"]
+
+
+def test_hotspots_and_thickness(planned):
+    _, w, s, plan = planned
+    t = thickness(plan.before)
+    assert abs(t.mean()) < 1e-15
+    assert hotspot_count(plan.before) == int(np.sum(np.abs(t) > DEFAULT_LIMITS["thickness"]))
+    assert hotspot_count(plan.before, {"thickness": 1.0}) == 0
+    assert hotspot_count(plan.before, {"thickness": 0.0, "step_height": 0.0}) >= w.density.size
+    with pytest.raises(ValueError, match="unknown hotspot"):
+        hotspot_count(plan.before, {"warp": 1e-9})
+    # a caller's own counter is used for the summaries
+    p2 = plan_fill(w, s, blanket_rate=RATE, iterations=0, hotspot_counter=lambda r: 7)
+    assert p2.to_dict()["before"]["hotspot_count"] == 7 and p2.added_area == 0.0
