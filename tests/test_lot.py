@@ -5,6 +5,7 @@ The 300mm preset (grooved) on the coarse grid, 25 wafers of the issue's oxide re
 three lots computed once for the module (about 20 s each on 2 cores)."""
 
 import json
+from importlib import resources
 
 import numpy as np
 import pytest
@@ -13,17 +14,7 @@ from click.testing import CliRunner
 from cmpsim.cli import main
 from cmpsim.polisher.lot import run_lot
 
-RECIPE = """# Oxide polish on the 300 mm head to a remaining-thickness target, for a lot of wafers.
-preset = "300mm"
-[[film]]
-material = "oxide"
-thickness = "1.0 um"
-[target]
-remaining = "500 nm"
-[[step]]
-name = "oxide"
-time = "60 s"
-"""
+RECIPE = (resources.files("cmpsim") / "data" / "recipe_oxide.toml").read_text(encoding="utf-8")  # the issue's oxide recipe, as written
 COARSE = {"grid": "coarse"}
 
 

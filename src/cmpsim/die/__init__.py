@@ -15,7 +15,8 @@ from .density import GaussianWeighting, PadWeighting, effective_density
 from .layout import BUILTIN_LAYOUTS, Layout, builtin_layout, read_layout
 from .pad import planarization_length_from_pad
 from .process import DIE_PARAMETERS, DieProcess
-from .polish import DieResult, WaferDies, blanket_rates, die_sites, load_layout, simulate, simulate_wafer
+from .polish import DieResult, load_layout, simulate
+from .wafer import WaferDies, blanket_rates, die_sites, simulate_wafer
 
 __all__ = [
     "simulate", "simulate_wafer", "DieResult", "WaferDies", "Layout", "read_layout", "builtin_layout", "BUILTIN_LAYOUTS",

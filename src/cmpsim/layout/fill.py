@@ -39,7 +39,7 @@ import gdstk
 import numpy as np
 
 from .extract import LayoutWindows, window_fields
-from .hierarchy import _orientation
+from .hierarchy import _orientation, placements
 from .layermaps import parse_layer, resolve_layers
 from .reader import Layout, layers_in, read_layout, top_cell
 
@@ -205,20 +205,7 @@ class _CellRects:
 
     def placements(self, name: str):
         """(child, matrix, (n, 2) translations) of the 90-degree references of a cell."""
-        out = []
-        for ref in self.cells[name].references:
-            if not isinstance(ref.cell, gdstk.Cell):
-                continue
-            m = _orientation(ref.rotation, ref.x_reflection, ref.magnification)
-            if m is None:
-                continue
-            origin = np.round(np.asarray(ref.origin, float))
-            if ref.repetition.size > 0:
-                offs = np.round(np.asarray(ref.repetition.get_offsets(), float)).reshape(-1, 2)
-            else:
-                offs = np.zeros((1, 2))
-            out.append((ref.cell.name, m, origin + offs))
-        return out
+        return placements(self.cells[name])
 
     def flat(self, name: str) -> np.ndarray:
         """All rectangles of the cell (its frame), flattened once and cached."""

@@ -77,6 +77,26 @@ def _inverse(m):
     return (m[3] * det, -m[1] * det, -m[2] * det, m[0] * det)
 
 
+def placements(cell) -> list:
+    """(child name, 2x2 matrix, (n, 2) translations in database units) of each reference of ``cell``
+    at a multiple of 90 degrees (mirrored or not, magnification 1), arrays expanded; references at
+    other angles or magnifications are left to the caller (they are flattened)."""
+    out = []
+    for ref in cell.references:
+        if not isinstance(ref.cell, gdstk.Cell):
+            continue
+        m = _orientation(ref.rotation, ref.x_reflection, ref.magnification)
+        if m is None:
+            continue
+        origin = np.round(np.asarray(ref.origin, float))
+        if ref.repetition.size > 0:
+            offsets = np.round(np.asarray(ref.repetition.get_offsets(), float)).reshape(-1, 2)
+        else:
+            offsets = np.zeros((1, 2))
+        out.append((ref.cell.name, m, origin + offsets))
+    return out
+
+
 @dataclass(frozen=True)
 class _Instances:
     """All placements of one child by one reference: orientation and (n, 2) translations."""
@@ -209,19 +229,7 @@ class CellRasters:
     def _references(self, name: str) -> list[_Instances]:
         if name in self._inst:
             return self._inst[name]
-        out = []
-        for ref in self.cells[name].references:
-            if not isinstance(ref.cell, gdstk.Cell):
-                continue
-            m = _orientation(ref.rotation, ref.x_reflection, ref.magnification)
-            if m is None:
-                continue
-            origin = np.round(np.asarray(ref.origin, float))
-            if ref.repetition.size > 0:
-                offsets = np.round(np.asarray(ref.repetition.get_offsets(), float)).reshape(-1, 2)
-            else:
-                offsets = np.zeros((1, 2))
-            out.append(_Instances(ref.cell.name, m, origin + offsets))
+        out = [_Instances(child, m, translations) for child, m, translations in placements(self.cells[name])]
         self._inst[name] = out
         return out
 
