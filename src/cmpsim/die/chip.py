@@ -24,8 +24,6 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
-
 from .layout import Layout
 from .polish import DieResult, _config, _conventions, _feature, _polish, _weighting
 from .process import DIE_PARAMETERS, PROCESSES, DieProcess
