@@ -22,9 +22,10 @@ from .group import _fail, _warn, main
 def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_body, max_upload, max_windows, workers, scheduler):
     """Start the browser UI and the JSON HTTP API (needs the extra: pip install "cmpsim[web]").
 
-    The page at / solves operating points, draws the wafer maps and runs sweeps; the API
-    (/api/solve, /api/sweeps, /api/validate, ...; reference at /api/docs) answers what
-    `cmpsim run --json`, `cmpsim sweep` and `cmpsim validate` give. See docs/web.md.
+    The page at / solves operating points, draws the wafer maps, runs sweeps and polishes a
+    die on an uploaded layout; the API (/api/solve, /api/sweeps, /api/validate, /api/die, ...;
+    reference at /api/docs) answers what `cmpsim run --json`, `cmpsim sweep`, `cmpsim validate`
+    and `cmpsim die LAYOUT --json` give. See docs/web.md.
     """
     from ..web import INSTALL_HINT
 
