@@ -34,7 +34,7 @@ def test_the_zone_feedback_flattens_a_linear_plant():
     r = np.linspace(0.0, 0.15, 61)
     centres = np.array([0.0, 0.05, 0.1, 0.14])
     response = np.exp(-(((r[:, None] - centres[None, :]) / 0.03) ** 2)) * 1e-13  # m/s/Pa, overlapping
-    base = 4e-9 + response @ np.array([-0.1, 0.05, -0.1, 0.4]) * PSI  # the edge polishes fast: a shape the zones can undo
+    base = 4e-9 + response @ np.array([-0.1, 0.05, -0.35, 0.4]) * PSI  # the edge polishes fast: a shape the zones can undo at equal load
     controller = EWMAController(target=0.5e-6, zone_weight=1.0, regularisation=1e-6)
     state = ControllerState(rate=4e-9, zone_pressures=(3 * PSI,) * 4)
     time, w = 60.0, area_weights(r)
@@ -46,6 +46,7 @@ def test_the_zone_feedback_flattens_a_linear_plant():
         state = zone_correction(controller, state, r, final, response, time)
     assert spreads[-1] < 1e-3 * spreads[0], spreads
     assert state.zone_pressures != (3 * PSI,) * 4  # the controller moved the zones
+    assert sum(state.zone_pressures) == pytest.approx(4 * 3 * PSI, rel=1e-12)  # and kept the load (equal zone areas)
 
 
 def test_the_controller_refuses_bad_settings():

@@ -18,7 +18,9 @@ the zone response R = d rate(r) / d P_k (m/s/Pa, :func:`cmpsim.head.zone_respons
 says removes it in the polish time: R' t dP = e_f in the area-weighted least-squares sense (R'
 the response about its wafer-area mean: the mean is the polish time's to set), with
 a small Tikhonov term because neighbouring zones' responses overlap (the problem is ill
-conditioned: docs/model.md 13f), and within the zone-pressure bounds.
+conditioned: docs/model.md 13f), keeping the load (sum_k A_k dP_k = 0: a uniform change of the
+zones moves the mean rate, which is the polish time's to set, and barely the shape), and within
+the zone-pressure bounds.
 
 A single EWMA lags a drifting process (pad wear: Chen & Guo, IEEE TSM 14 (2001) 19 propose an
 age-based double EWMA); the lag is visible in the lot's first wafers and is reported, not hidden.
@@ -97,12 +99,14 @@ def zone_correction(
     final_thickness,
     response,
     polish_time: float,
+    zone_areas=None,
 ) -> ControllerState:
     """The zone pressures for the next wafer from the last wafer's remaining thickness (m at each radius).
 
     ``response`` is d rate(r) / d P_k (m/s/Pa, radii x zones) at the current pressures; the shape
     of the remaining thickness about its area mean is filtered (EWMA) and removed in
-    ``polish_time`` (s) by the bounded, regularised least-squares pressure change.
+    ``polish_time`` (s) by the bounded, regularised least-squares pressure change that keeps the
+    load (``zone_areas``, m^2, the weights of the zones' pressures in the load; equal by default).
     """
     radius = np.asarray(radius, dtype=float)
     final = np.asarray(final_thickness, dtype=float)
@@ -114,8 +118,13 @@ def zone_correction(
     a = shape * polish_time * np.sqrt(w)[:, None]
     b = filtered * np.sqrt(w)
     gram = a.T @ a
-    alpha = controller.regularisation * np.trace(gram) / max(gram.shape[0], 1)
-    step = np.linalg.solve(gram + alpha * np.eye(gram.shape[0]), a.T @ b)
+    n = gram.shape[0]
+    alpha = controller.regularisation * np.trace(gram) / max(n, 1)
+    # the load is kept: sum_k A_k dP_k = 0 (the zones' areas), so that the shape correction does not
+    # drift along the common mode the shape barely sees (the mean rate is the polish time's)
+    c = np.ones(n) if zone_areas is None else np.asarray(zone_areas, dtype=float)
+    kkt = np.block([[gram + alpha * np.eye(n), c[:, None]], [c[None, :], np.zeros((1, 1))]])
+    step = np.linalg.solve(kkt, np.concatenate([a.T @ b, [0.0]]))[:n]
     lo, hi = controller.bounds
     pressures = tuple(float(p) for p in np.clip(np.asarray(state.zone_pressures, dtype=float) + step, lo, hi))
     return replace(state, zone_pressures=pressures, profile_error=filtered)

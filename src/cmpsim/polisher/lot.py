@@ -236,6 +236,8 @@ def run_lot(
     others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
 
     zoned = len(base.zone_radii) > 0
+    edges = np.concatenate(([0.0], np.asarray(base.zone_radii, dtype=float)))
+    zone_areas = np.pi * np.diff(edges**2)  # m^2: the zones' shares of the load
     start_pressures = tuple(base.zone_pressures) if base.zone_pressures else ((base.applied_pressure,) * len(base.zone_radii) if zoned else ())
     response = None
     state = None
@@ -300,7 +302,7 @@ def run_lot(
             controlled_time = wafer_recipe.steps[step_k].time
             state = update_rate(state, removed, total_time, controller.weight)
             if zoned:
-                state = zone_correction(controller, state, radius, final, response, controlled_time)
+                state = zone_correction(controller, state, radius, final, response, controlled_time, zone_areas)
     return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves, _time.perf_counter() - t0)
 
 
