@@ -505,7 +505,7 @@ def test_the_web_form_offers_the_abrasive_inputs_with_units_and_choices(client):
     assert by_name["solids_loading"]["display_unit"] == "%" and by_name["solids_loading"]["default_display"] == "12.5"
     assert by_name["particle_size_std"]["display_unit"] == "nm"
     assert by_name["abrasive"]["choices"] == ["silica", "ceria", "alumina"]
-    assert by_name["film"]["choices"] == ["oxide", "copper", "tungsten"]
+    assert by_name["film"]["choices"] == ["oxide", "copper", "tungsten", "barrier"]  # the Ta barrier joined the film table in issue 32
     assert by_name["removal_kinetics"]["choices"] == ["mechanical", "two_step"]
     assert "abrasive" in by_name["removal_law"]["choices"] and by_name["removal_law"]["default_display"] == "abrasive"
 
