@@ -5,6 +5,7 @@ layouts are built here with gdstk (nothing outside the suite)."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import gdstk
@@ -314,3 +315,124 @@ def test_hotspots_and_thickness(planned):
     # a caller's own counter is used for the summaries
     p2 = plan_fill(w, s, blanket_rate=RATE, iterations=0, hotspot_counter=lambda r: 7)
     assert p2.to_dict()["before"]["hotspot_count"] == 7 and p2.added_area == 0.0
+
+
+# ------------------------------------------------------------------------------ cmpsim die --fill
+def dense_and_sparse(path):
+    """A 1 x 1 mm chip: a dense block (2 um lines at 4 um pitch, 0.5) and a sparse one (2 um lines at
+    20 um pitch, 0.1), 400 x 400 um each, empty space between. GDSII or OASIS by the suffix."""
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    line = lib.new_cell("LINE")
+    line.add(gdstk.rectangle((0, 0), (2 * NM, 400 * NM), layer=68, datatype=20))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (1000 * NM, 1000 * NM), layer=235, datatype=4))
+    top.add(gdstk.Reference(line, (50 * NM, 50 * NM), columns=100, rows=1, spacing=(4 * NM, 0)))
+    top.add(gdstk.Reference(line, (550 * NM, 550 * NM), columns=20, rows=1, spacing=(20 * NM, 0)))
+    (lib.write_oas if str(path).endswith(".oas") else lib.write_gds)(str(path))
+    return path
+
+
+FILL_ARGS = ["--layer", "68/20", "--window", "50um", "--planarization-length", "0.3mm", "--blanket-rate", "120nm/min",
+             "--spec", "thickness=20nm"]
+FILL_RULE_ARGS = ["--fill-layer", "36/28", "--fill-size", "2um", "--fill-spacing", "2um", "--fill-keepout", "2um"]
+
+
+def _die(*args):
+    from click.testing import CliRunner
+
+    from cmpsim.cli import main
+
+    return CliRunner().invoke(main, ["die", *map(str, args)])
+
+
+@pytest.fixture(scope="module")
+def fill_run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("diefill")
+    path = dense_and_sparse(tmp / "chip.gds")
+    out = tmp / "out"
+    res = _die(path, *FILL_ARGS, "--fill", *FILL_RULE_ARGS, "--json", "--out", out)
+    assert res.exit_code == 0, res.output
+    return path, out, json.loads(res.stdout)
+
+
+def test_cli_fill_reports_before_and_after_with_the_die_commands_definitions(fill_run):
+    path, out, d = fill_run
+    f = d["fill"]
+    assert {"before", "after", "added_area"} <= set(f)
+    assert set(f["before"]) == set(f["after"]) == {"hotspot_count", "thickness_range"}
+    assert f["units"]["added_area"] == d["units"]["added_area"] == "m^2" and f["units"]["thickness_range"] == "m"
+    assert f["after"]["thickness_range"] < 0.7 * f["before"]["thickness_range"]
+    assert f["after"]["hotspot_count"] < f["before"]["hotspot_count"]
+    assert f["added_area"] == pytest.approx(f["squares"] * (2 * UM) ** 2) and 0 < f["added_area"] < (1000 * UM) ** 2
+    assert f["layer"] == "36/28" and f["file"] == "fill.gds" and f["rules"]["keepout"] == pytest.approx(2 * UM)
+    # the die of the JSON and of --out is the filled one ...
+    assert d["thickness_range"] == f["after"]["thickness_range"] and d["hotspot_count"] == f["after"]["hotspot_count"]
+    assert d["hotspot_count"] == len(d["hotspots"])
+    on_disk = json.loads((out / "die.json").read_text())
+    assert on_disk["fill"]["after"] == f["after"]
+    # ... and `before` is exactly what `cmpsim die` says of the drawn layout (one die model, one hotspot count)
+    res = _die(path, *FILL_ARGS, "--json")
+    assert res.exit_code == 0, res.output
+    drawn = json.loads(res.stdout)
+    assert "fill" not in drawn
+    assert f["before"] == {"hotspot_count": drawn["hotspot_count"], "thickness_range": drawn["thickness_range"]}
+
+
+def test_cli_fill_file_reads_back_and_keeps_out_of_the_drawn_shapes(fill_run):
+    path, out, d = fill_run
+    assert {p.name for p in out.iterdir()} == {"die.json", "die.nc", "die.png", "hotspots.lyrdb", "hotspots.csv", "fill.gds"}
+    lib = gdstk.read_gds(str(out / "fill.gds"))
+    top = next(c for c in lib.top_level())
+    fill = top.get_polygons()
+    assert len(fill) == d["fill"]["squares"] > 0
+    assert {(p.layer, p.datatype) for p in fill} == {(36, 28)}
+    assert sum(p.area() for p in fill) * 1e-18 == pytest.approx(d["fill"]["added_area"], rel=1e-9)
+    drawn = top_cell(read_layout(path)).get_polygons(layer=68, datatype=20)
+    grown = gdstk.offset(drawn, 2 * NM - 1.0, join="miter", use_union=True)
+    assert gdstk.boolean(fill, grown, "and") == []
+    assert gdstk.boolean(fill, drawn, "and") == []
+
+
+def test_cli_fill_oasis_in_oasis_out(tmp_path):
+    path = dense_and_sparse(tmp_path / "chip.oas")
+    res = _die(path, *FILL_ARGS, "--fill", *FILL_RULE_ARGS, "--json", "--out", tmp_path / "out")
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["fill"]["file"] == "fill.oas"
+    assert (tmp_path / "out" / "fill.oas").is_file() and not (tmp_path / "out" / "fill.gds").exists()
+    polys = top_cell(read_layout(tmp_path / "out" / "fill.oas")).get_polygons()
+    assert len(polys) == json.loads(res.stdout)["fill"]["squares"]
+
+
+def test_cli_fill_defaults_from_the_pdk():
+    from cmpsim.cli.die import _fill_setup
+
+    rules, pair = _fill_setup(["met1"], "sky130", None, None, None, None, None, None)
+    assert pair == (36, 28) and rules == FILL_RULES["sky130"]["met1"]
+    rules, pair = _fill_setup(["68/20"], "sky130", None, None, None, None, "4um", None)  # the drawn pair names met1
+    assert pair == (36, 28) and rules.keepout == pytest.approx(4 * UM) and "overrides" in rules.source
+    rules, pair = _fill_setup(["metal2"], "gf180mcu", None, "36/9", None, None, None, None)
+    assert pair == (36, 9) and rules == FILL_RULES["gf180mcu"]["metal2"]
+
+
+def test_cli_fill_bad_input_exits_2_naming_the_option_and_writes_nothing(tmp_path):
+    path = dense_and_sparse(tmp_path / "chip.gds")
+    stack = tmp_path / "stack.toml"
+    stack.write_text('[[level]]\nname = "m1"\nlayers = ["68/20"]\nprocess = "oxide"\n')
+    out = tmp_path / "out"
+    cases = [
+        ([path, "--layer", "68/20", "--fill"], "--fill-layer"),
+        ([path, "--layer", "68/20", "--fill", "--fill-layer", "36/28", "--fill-size", "2um"], "--fill-spacing, --fill-keepout"),
+        ([path, "--layer", "68/20", "--fill", "--fill-layer", "met1", "--fill-size", "2um", "--fill-spacing", "1um",
+          "--fill-keepout", "1um"], "--fill-layer 'met1'"),
+        ([path, "--layer", "68/20", "--fill", *FILL_RULE_ARGS[:-1], "0um"], "--fill-keepout"),
+        ([path, "--layer", "68/20", "--fill-size", "2um"], "needs --fill"),
+        ([path, "--stack", stack, "--fill", *FILL_RULE_ARGS], "--fill with --stack"),
+        ([path, "--layer", "68/20", "--wafer", "--fill", *FILL_RULE_ARGS], "--fill with --wafer"),
+        (["uniform", "--fill", *FILL_RULE_ARGS], "--fill apply to a layout file"),
+        ([path, "--layer", "68/20", "--pdk", "sky130", "--layer", "69/20", "--fill"], "--fill-layer"),
+    ]
+    for args, text in cases:
+        res = _die(*args, "--out", out)
+        assert res.exit_code == 2, (args, res.output)
+        assert text in res.output, (args, res.output)
+        assert not out.exists(), args

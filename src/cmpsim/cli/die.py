@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import click
 
 from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
@@ -29,11 +31,17 @@ from .inputs import config_options, load_config, parse_assignments
 @click.option("--layer-map", "layer_map", type=click.Path(dir_okay=False), default=None, help="Layout: a TOML layer map (name = [\"L/D\", ...]).")
 @click.option("--stack", "stack_path", type=click.Path(dir_okay=False), default=None, help="Layout: a stack file (TOML, [[level]] with name, layers, process): levels polished bottom first over the topography each leaves.")
 @click.option("--spec", "specs", multiple=True, metavar="KIND=LIMIT", help="A hotspot limit: thickness=5nm, step_height=20nm, dishing=30nm, erosion=20nm (repeatable).")
+@click.option("--fill", "fill", is_flag=True, help="Layout: add model-based dummy fill where the die model says it lowers the thickness range, write fill.gds/fill.oas to --out, re-simulate; JSON fill {before, after, added_area}. The maps, hotspots and scalars are then those of the filled die.")
+@click.option("--fill-layer", "fill_layer", metavar="L/D", default=None, help="--fill: the fill's layer/datatype (default with --pdk: the PDK's fill datatype of the --layer, e.g. 36/28 for sky130 met1).")
+@click.option("--fill-size", "fill_size", metavar="SIZE", default=None, help="--fill: side of a fill square (default with --pdk: the PDK's, docs/fill.md).")
+@click.option("--fill-spacing", "fill_spacing", metavar="SIZE", default=None, help="--fill: least distance between two fill squares (default with --pdk: the PDK's).")
+@click.option("--fill-keepout", "fill_keepout", metavar="SIZE", default=None, help="--fill: least distance from a fill square to a drawn shape of the --layer layers (default with --pdk: the PDK's).")
+@click.option("--fill-edge", "fill_edge", metavar="SIZE", default=None, help="--fill: least distance from a fill square to the die's edge (default with --pdk: the PDK's, else 0).")
 @config_options
-@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write die.nc, die.png, die.json (wafer.nc, wafer.png with --wafer; hotspots.lyrdb, hotspots.csv on a layout) to DIR.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Write die.nc, die.png, die.json (wafer.nc, wafer.png with --wafer; hotspots.lyrdb, hotspots.csv on a layout; fill.gds or fill.oas with --fill) to DIR.")
 @click.option("--json", "as_json", is_flag=True, help="Print exactly one JSON object (SI units) on stdout.")
 def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, weighting, feature_contact, cell_text, rate_text, layers, window_text,
-                top, pdk, layer_map, stack_path, specs, config_path, preset, assignments, grid, out_dir, as_json):
+                top, pdk, layer_map, stack_path, specs, fill, fill_layer, fill_size, fill_spacing, fill_keepout, fill_edge, config_path, preset, assignments, grid, out_dir, as_json):
     """Polish a patterned die: effective density, step heights, copper dishing and erosion.
 
     LAYOUT is a layout CSV (density grid, cell size, optional line widths; docs/model.md
@@ -58,10 +66,15 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     layout_arg = layout
     real = layout not in BUILTIN_LAYOUTS and is_layout_file(layout)
     stack = None
+    plan = fill_file = None
+    fill_given = [name for name, v in (("--fill-layer", fill_layer), ("--fill-size", fill_size), ("--fill-spacing", fill_spacing),
+                                       ("--fill-keepout", fill_keepout), ("--fill-edge", fill_edge)) if v]
     try:
+        if fill_given and not fill:
+            raise ValueError(f"{', '.join(fill_given)} {'needs' if len(fill_given) == 1 else 'need'} --fill")
         if not real:
             given = [name for name, v in (("--layer", layers), ("--window", window_text), ("--top", top), ("--pdk", pdk),
-                                          ("--layer-map", layer_map), ("--stack", stack_path)) if v]
+                                          ("--layer-map", layer_map), ("--stack", stack_path), ("--fill", fill)) if v]
             if given:
                 raise ValueError(f"{', '.join(given)} apply to a layout file (.gds, .gds.gz, .oas); {layout!r} is a CSV grid or a built-in die")
         elif cell_text:
@@ -73,6 +86,10 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
                       cell_size=to_si(cell_text, "m", "--cell-size", "50 um") if cell_text else None, spec=spec, **parse_assignments(params))
         t = to_si(time_text, "s", "--time", "90 s") if time_text else None
         window = to_si(window_text, "m", "--window", "20 um") if window_text else None
+        if fill and stack_path:
+            raise ValueError("--fill with --stack is not supported: fill one level at a time (cmpsim die LAYOUT --layer ... --fill)")
+        if fill and wafer:
+            raise ValueError("--fill with --wafer is not supported: fill the die (--fill), then run --wafer on the layout merged with fill.gds")
         if real and stack_path:
             if layers:
                 raise ValueError("give the layers in the stack file's [[level]] tables, not with --layer, when --stack is used")
@@ -91,8 +108,14 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
         elif real:
             if not layers:
                 raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml")
-            layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk, layer_map=layer_map)
-        if stack is not None:
+            if fill:
+                rules, fill_pair = _fill_setup(list(layers), pdk, layer_map, fill_layer, fill_size, fill_spacing, fill_keepout, fill_edge)
+                rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
+                result, plan, fill_file = _fill_run(layout, list(layers), window if window is not None else 20e-6, top, pdk, layer_map,
+                                                    rules, fill_pair, cfg, rate, t, kwargs, out_dir)
+            else:
+                layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk, layer_map=layer_map)
+        if stack is not None or plan is not None:
             pass
         elif wafer:
             if rate_text:
@@ -108,6 +131,10 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     if out_dir:
         try:
             written = write_die_outputs(result, out_dir, original_file=str(layout_arg) if real else "")
+            if plan is not None:
+                from ..layout.fill import write_fill
+
+                written.append(write_fill(Path(out_dir) / fill_file, plan.sites, plan.chosen, fill_pair))
         except OSError as exc:
             _fail(f"cannot write to {out_dir}: {exc}")
     if as_json:
@@ -118,6 +145,12 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     console = Console()
     if stack is not None or real:
         _print_layout_run(console, result, stack is not None, wafer)
+        if plan is not None:
+            f = result.fill
+            console.print(f"fill on {f['layer']}: {f['squares']} squares of {f['rules']['size'] * 1e6:g} um, {f['added_area'] * 1e6:.4g} mm^2 added; "
+                          f"thickness range {f['before']['thickness_range'] * 1e9:.4g} -> {f['after']['thickness_range'] * 1e9:.4g} nm, "
+                          f"hotspots {f['before']['hotspot_count']} -> {f['after']['hotspot_count']} (the table above is the filled die)",
+                          highlight=False)
         if out_dir:
             console.print("wrote " + ", ".join(str(p) for p in written), highlight=False)
         return
@@ -170,3 +203,79 @@ def _print_layout_run(console, result, is_stack: bool, wafer: bool) -> None:
         console.print(f"{len(result.x)} dies ({result.reading} reading); blanket rate {np.min(result.blanket_rate) * 6e10:.4g}-"
                       f"{np.max(result.blanket_rate) * 6e10:.4g} nm/min; hotspots per die {int(np.min(result.hotspot_count))}-"
                       f"{int(np.max(result.hotspot_count))}, {int(np.sum(result.hotspot_count))} on the wafer", highlight=False)
+
+
+def _fill_setup(layers, pdk, layer_map, fill_layer, size_text, spacing_text, keepout_text, edge_text):
+    """The fill rules and the fill's (layer, datatype) of ``--fill``: the PDK's where ``--pdk`` names the layer, overridable;
+    without it ``--fill-layer`` and the rules are required. ValueError naming the option."""
+    from ..inputs.units import to_si
+    from ..layout.fill import FILL_RULES, fill_rules
+    from ..layout.layermaps import PDK_LAYER_MAPS, parse_layer, resolve_layer
+
+    names = []  # the PDK layer names of the --layer values (by name, or by their drawn pair)
+    if pdk:
+        table = PDK_LAYER_MAPS[pdk]
+        for spec in layers:
+            key = str(spec).lower()
+            if key in table and parse_layer(spec) is None:
+                name = key
+            else:
+                pairs = resolve_layer(spec, pdk, layer_map)
+                name = next((n for n, mp in table.items() if mp[0] in pairs), None)
+            if name is not None and name not in names:
+                names.append(name)
+    one = names[0] if len(names) == 1 and len(layers) == 1 else None
+    where = (f"--pdk {pdk} names the --layer {one}" if one else
+             f"--pdk does not name one fill layer for --layer {', '.join(layers)}" if pdk else "without --pdk")
+    if fill_layer is None:
+        if one is None:
+            raise ValueError(f"--fill needs --fill-layer L/D (the fill's layer/datatype, e.g. 36/28): {where}")
+        pair = PDK_LAYER_MAPS[pdk][one][1]
+    else:
+        pair = parse_layer(fill_layer)
+        if pair is None:
+            raise ValueError(f"--fill-layer {fill_layer!r} must be L/D, a layer/datatype such as 36/28")
+    values = {k: to_si(v, "m", opt, "2 um") if v else None
+              for k, v, opt in (("size", size_text, "--fill-size"), ("spacing", spacing_text, "--fill-spacing"),
+                                ("keepout", keepout_text, "--fill-keepout"), ("edge", edge_text, "--fill-edge"))}
+    if one is None or one not in FILL_RULES.get(pdk, {}):
+        missing = [f"--fill-{k}" for k in ("size", "spacing", "keepout") if values[k] is None]
+        if missing:
+            raise ValueError(f"--fill needs the fill rules {', '.join(missing)} (e.g. --fill-size 2um --fill-spacing 1um "
+                             f"--fill-keepout 3um): {where}")
+    try:
+        rules = fill_rules(pdk, one, **values) if one is not None and one in FILL_RULES.get(pdk, {}) else fill_rules(None, **values)
+    except ValueError as exc:
+        raise ValueError(str(exc).replace("fill rule ", "--fill-")) from None
+    if not rules.keepout > 0:
+        raise ValueError(f"--fill-keepout must be a length > 0 (fill touching a drawn shape would merge with it); got {rules.keepout!r} m")
+    return rules, pair
+
+
+def _fill_run(path, layers, window, top, pdk, layer_map, rules, pair, cfg, rate, t, kwargs, out_dir):
+    """Extract the windows and the free fill sites, plan the fill with the die command's own :class:`DieModel` (its wafer
+    solve, weighting and --spec limits) and return (the filled die with its ``fill`` object, the plan, the fill file's name)."""
+    from dataclasses import replace
+
+    from ..die.chip import DieModel
+    from ..die.fill import plan_fill
+    from ..layout import extract_windows, read_layout
+    from ..layout.fill import fill_sites
+
+    try:
+        lay = read_layout(path)
+    except FileNotFoundError as exc:
+        raise ValueError(str(exc)) from None
+    windows = extract_windows(lay, layers, window, top=top, pdk=pdk, layer_map=layer_map)
+    sites = fill_sites(lay, layers, windows, rules, top=top, pdk=pdk, layer_map=layer_map)
+    kw = dict(kwargs)
+    kw.pop("cell_size", None)
+    process = kw.pop("process")
+    model = DieModel(cfg, process, blanket_rate=rate, **kw)
+    plan = plan_fill(windows, sites, model=model, time=t)
+    name = "fill.oas" if lay.format == "oas" else "fill.gds"
+    fill = plan.to_dict() | {"layer": f"{pair[0]}/{pair[1]}", "file": name if out_dir else None,
+                             "rules": {"size": rules.size, "spacing": rules.spacing, "keepout": rules.keepout, "edge": rules.edge,
+                                       "source": rules.source},
+                             "units": {"added_area": "m^2", "thickness_range": "m", "hotspot_count": "1", "rules": "m"}}
+    return replace(plan.after, fill=fill), plan, name

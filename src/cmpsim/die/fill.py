@@ -3,12 +3,15 @@
 Not a flat density target: the added density x (one value per window, bounded by what the
 window's free fill sites can hold, :class:`cmpsim.layout.fill.FillSites`) is chosen to
 minimise the **thickness range** of the die model's final surface, the range of the mean
-surface height of the windows after polishing (:func:`cmpsim.die.simulate`), the quantity
-the hotspots of ``thickness`` are measured on.
+surface height of the windows after polishing, the quantity the hotspots of ``thickness`` are
+measured on. Every die (as drawn, each trial fill) is polished by a
+:class:`cmpsim.die.chip.DieModel` on :meth:`cmpsim.die.layout.Layout.from_windows` of its
+window fields: the pipeline of ``cmpsim die LAYOUT``, so that ``before``/``after`` are the die
+command's own ``thickness_range`` and ``hotspot_count`` (with its ``--spec`` limits).
 
 **Algorithm** (sequential linearisation, docs/fill.md):
 
-1. Polish the die as drawn (the die model's own end point): the thickness T_i of every window.
+1. Polish the die as drawn (the die model's own end point, or the given time): the thickness T_i of every window.
 2. The linear response of T to the fill: a window's final height depends on its own local
    fields (density, width) and on the effective density rho_eff = w * rho, the only coupling
    between windows. The die evolution is independent cell by cell given (rho, w, rho_eff), so
@@ -18,8 +21,8 @@ the hotspots of ``thickness`` are measured on.
    T(x) ~ T + a (w * dx) + b dx, linear in dx, with w * the FFT convolution of the weighting.
 3. Minimise a smooth range of that linear model, LSE_beta(T) + LSE_beta(-T) (log-sum-exp,
    beta set so that its excess over max - min is about 1 % of the range), plus a small
-   price per added density, over 0 <= x <= capacity (L-BFGS-B with bounds; the gradient is
-   one convolution: the weighting is symmetric).
+   price per added density, over 0 <= x <= capacity (spectral projected gradient; the
+   gradient is one convolution: the weighting is symmetric).
 4. Round x to whole squares per window, re-polish with the exact window fields, accept if
    the range fell (else halve the step), and repeat from 2 (``iterations`` times).
 
@@ -43,47 +46,43 @@ import numpy as np
 from .density import effective_density
 from .evolution import DieEvolution
 from .layout import Layout
-from .polish import DieResult, _prepare, simulate
+from .polish import DieResult
 
 __all__ = ["FillPlan", "plan_fill", "die_layout", "thickness", "thickness_range", "hotspot_count", "DEFAULT_LIMITS"]
 
-#: Hotspot limits used when none are given (m): a window's final surface more than 5 nm off the
-#: die's mean (the example of issue 33, ``--spec thickness=5nm``).
+#: Hotspot limits used by the library call when neither a model nor limits are given (m): a window's final
+#: surface more than 5 nm off the die's mean (the example of issue 33, ``--spec thickness=5nm``). ``cmpsim die
+#: --fill`` never uses them: it counts with its own ``--spec`` limits (none given: no hotspots), as the die does.
 DEFAULT_LIMITS = {"thickness": 5e-9}
 
 
 def die_layout(windows, name: str | None = None) -> Layout:
-    """The die model's :class:`Layout` of a :class:`cmpsim.layout.LayoutWindows` (density, width per window)."""
-    rho = np.clip(np.asarray(windows.density, dtype=float), 0.0, 1.0)
-    width = np.where(rho > 0, np.asarray(windows.width, dtype=float), 0.0)
-    return Layout(rho, float(windows.window), width, name or windows.top)
+    """The die model's :class:`Layout` of a :class:`cmpsim.layout.LayoutWindows`: :meth:`Layout.from_windows`,
+    the die ``cmpsim die LAYOUT`` polishes (density, width and space per window, the edge windows' part inside the die)."""
+    return Layout.from_windows(windows, name)
 
 
 def thickness(result: DieResult) -> np.ndarray:
-    """Each window's final surface height off the die's mean (m): the mean surface height minus its die mean."""
-    h = result.evolution.mean_height
-    return h - float(np.mean(h))
+    """Each window's final surface height off the die's mean (m): :attr:`DieEvolution.thickness`."""
+    return result.evolution.thickness
 
 
 def thickness_range(result: DieResult) -> float:
-    """max - min of the final surface over the die (m)."""
-    h = result.evolution.mean_height
-    return float(np.max(h) - np.min(h))
+    """max - min of the final surface over the die (m): :attr:`DieResult.thickness_range`."""
+    return result.thickness_range
 
 
 def hotspot_count(result: DieResult, limits: dict | None = None) -> int:
-    """Windows over a limit, counted per quantity and summed: ``thickness`` (|height off the die mean|),
-    ``step_height``, ``dishing``, ``erosion`` (m; NaN values never count)."""
+    """The die command's hotspot count (:meth:`DieResult.hotspot_count`, :func:`cmpsim.die.hotspots.count_hotspots`):
+    windows over a limit, per quantity, summed: ``thickness`` (|height off the die mean|), ``step_height``,
+    ``dishing``, ``erosion`` (m; NaN never counts). ``limits`` default :data:`DEFAULT_LIMITS`."""
+    from .hotspots import SPEC_KINDS
+
     limits = DEFAULT_LIMITS if limits is None else limits
-    ev = result.evolution
-    fields = {"thickness": np.abs(thickness(result)), "step_height": ev.step_height, "dishing": ev.dishing, "erosion": ev.erosion}
-    n = 0
-    for kind, limit in limits.items():
-        if kind not in fields:
-            raise ValueError(f"unknown hotspot quantity {kind!r}; valid: {', '.join(fields)}")
-        v = np.nan_to_num(np.asarray(fields[kind], dtype=float), nan=-np.inf)
-        n += int(np.count_nonzero(v > limit))
-    return n
+    for kind in limits:
+        if kind not in SPEC_KINDS:
+            raise ValueError(f"unknown hotspot quantity {kind!r}; valid: {', '.join(SPEC_KINDS)}")
+    return result.hotspot_count(dict(limits)) if limits else 0
 
 
 def _projected_descent(fun, x0, lo, hi, steps: int, tol: float = 1e-7):
@@ -115,9 +114,10 @@ def _projected_descent(fun, x0, lo, hi, steps: int, tol: float = 1e-7):
     return x
 
 
-def _summary(result: DieResult, limits, counter) -> dict:
-    return {"hotspot_count": int(counter(result) if counter is not None else hotspot_count(result, limits)),
-            "thickness_range": thickness_range(result)}
+def _summary(result: DieResult, counter) -> dict:
+    """{hotspot_count, thickness_range} of a polished die: the die command's own definitions (the result's ``spec``)."""
+    return {"hotspot_count": int(counter(result) if counter is not None else result.hotspot_count()),
+            "thickness_range": result.thickness_range}
 
 
 @dataclass
@@ -127,7 +127,7 @@ class FillPlan:
     ``counts`` (ny, nx) squares per window; ``chosen`` the chosen lattice sites (for
     :func:`cmpsim.layout.fill.write_fill`); ``windows`` the window fields after fill;
     ``before``/``after`` the polished dies; ``added_area`` m^2; ``history`` the range (m) after
-    each accepted outer iteration; ``stats`` the cost (s) and counts.
+    each accepted outer iteration; ``stats`` the cost (s) and counts; ``sites`` the fill sites it chose from.
     """
 
     counts: np.ndarray
@@ -141,6 +141,7 @@ class FillPlan:
     stats: dict = field(default_factory=dict)
     summary_before: dict = field(default_factory=dict)
     summary_after: dict = field(default_factory=dict)
+    sites: object = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         """The JSON ``fill`` object: {before: {hotspot_count, thickness_range}, after: {...}, added_area} (SI)."""
@@ -149,81 +150,100 @@ class FillPlan:
                 "thickness_range_history": [float(v) for v in self.history]}
 
 
-def _fields(windows, n, side):
-    """(density, width) of the windows with n (float) squares of side ``side`` (m) added."""
+def _with_squares(windows, n, side):
+    """The :class:`LayoutWindows` with n (float) squares of side ``side`` (m) added per window: area A + n s^2 and
+    boundary L + 4 n s (exact: :func:`cmpsim.layout.fill.filled_windows`), density, width, space from them."""
+    from dataclasses import replace
+
     from ..layout.extract import window_fields
 
+    if not np.any(n):
+        return windows
     area = windows.density * windows.window**2 + n * side**2
     boundary = windows.boundary + 4.0 * n * side
-    rho, width, _ = window_fields(area, boundary, windows.window)
-    rho = np.clip(rho, 0.0, 1.0)
-    return rho, np.where(rho > 0, width, 0.0)
+    density, width, space = window_fields(area, boundary, windows.window)
+    return replace(windows, density=density, width=width, space=space, boundary=boundary)
 
 
-def plan_fill(windows, sites, *, config=None, blanket_rate: float | None = None, process=None,
-              planarization_length: float | None = None, weighting: str = "gaussian", feature_contact: str = "elastic",
-              limits: dict | None = None, hotspot_counter=None, iterations: int = 3, area_price: float = 1e-3, max_steps: int = 300,
-              **process_values) -> FillPlan:
+def _inside_fraction(windows) -> np.ndarray:
+    """(ny, nx) the part of each window inside the die's outline (1 inside; :meth:`Layout.from_windows` divides by it)."""
+    W = float(windows.window)
+    x0, y0, x1, y1 = windows.bbox
+    fx = np.clip((np.minimum(windows.x + 0.5 * W, x1) - np.maximum(windows.x - 0.5 * W, x0)) / W, 0.0, 1.0)
+    fy = np.clip((np.minimum(windows.y + 0.5 * W, y1) - np.maximum(windows.y - 0.5 * W, y0)) / W, 0.0, 1.0)
+    return np.maximum(fy[:, None] * fx[None, :], 1e-300)
+
+
+def plan_fill(windows, sites, *, model=None, time: float | None = None, config=None, blanket_rate: float | None = None,
+              process=None, planarization_length: float | None = None, weighting: str = "gaussian",
+              feature_contact: str = "elastic", limits: dict | None = None, hotspot_counter=None, iterations: int = 3,
+              area_price: float = 1e-3, max_steps: int = 300, before: DieResult | None = None, **process_values) -> FillPlan:
     """Choose the fill squares of every window that minimise the die model's thickness range.
 
     ``windows`` the :class:`cmpsim.layout.LayoutWindows` of the drawn layer; ``sites`` its
-    :class:`cmpsim.layout.fill.FillSites`. The die inputs are those of :func:`cmpsim.die.simulate`
-    (``blanket_rate`` default: one wafer solve of ``config``, made once). ``limits`` the
-    hotspot limits (m, :func:`hotspot_count`) or ``hotspot_counter(result) -> int`` the
-    caller's own count. ``iterations`` the outer linearisations, ``max_steps`` the projected-gradient
-    steps of each; ``area_price`` the price of
-    added density relative to the range (a tie-breaker: among fills of equal range, less).
+    :class:`cmpsim.layout.fill.FillSites`. Every die is polished by ``model``, a
+    :class:`cmpsim.die.chip.DieModel` (the one ``cmpsim die`` runs: its wafer solve, weighting, pad
+    contact and ``spec`` limits), on :meth:`Layout.from_windows` of the window fields with the
+    squares added, for ``time`` (s; default each die's own end point x (1 + over_polish)), so the
+    before/after ``hotspot_count`` and ``thickness_range`` are the die command's own. Without a
+    model one is made from ``config``, ``blanket_rate`` (default: one wafer solve), ``process``,
+    ``planarization_length``, ``weighting``, ``feature_contact`` and the process keywords, with
+    ``limits`` as its spec (default :data:`DEFAULT_LIMITS`). ``hotspot_counter(result) -> int``
+    replaces the count. ``before`` the die as drawn when the caller polished it already (with the
+    same model and time). ``iterations`` the outer linearisations, ``max_steps`` the
+    projected-gradient steps of each; ``area_price`` the price of added density relative to the
+    range (a tie-breaker: among fills of equal range, less).
     """
-    from ..layout.fill import select_fill, filled_windows
+    from ..layout.fill import filled_windows, select_fill
+    from .chip import DieModel
 
     t_start = _time.perf_counter()
     if tuple(sites.shape) != tuple(windows.density.shape):
         raise ValueError(f"fill sites {sites.shape} and windows {windows.density.shape} are not the same grid")
-    limits = DEFAULT_LIMITS if limits is None else dict(limits)
-    base = die_layout(windows)
-    config, base, process, w, _, _, fc = _prepare(base, config, process, planarization_length, weighting, None,
-                                                  feature_contact, **process_values)
-    if blanket_rate is None:
-        from ..solver.model import solve
-
-        blanket_rate = float(solve(config, relative=False).removal_rate_mean)
-    sim = dict(config=config, blanket_rate=blanket_rate, process=process, planarization_length=planarization_length,
-               weighting=weighting, feature_contact=feature_contact)
+    if model is None:
+        model = DieModel(config, process, blanket_rate=blanket_rate, planarization_length=planarization_length, weighting=weighting,
+                         feature_contact=feature_contact, spec=DEFAULT_LIMITS if limits is None else limits, **process_values)
+    elif limits is not None:
+        raise ValueError("give the hotspot limits as the model's spec, not as limits, when a model is given")
+    base = Layout.from_windows(windows)
     side = sites.size * sites.dbu
     step = sites.density_step
-    cap = sites.capacity.astype(float) * step  # the most density each window can take
+    cap = sites.capacity.astype(float) * step  # the most density (of the whole window) each window can take
     cell = float(windows.window)
-    name = base.name
+    gain = 1.0 / _inside_fraction(windows)  # the die's density per unit of window density (edge windows: > 1)
+    w = model.weight
+
+    def layout_of(n):
+        return base if not np.any(n) else Layout.from_windows(_with_squares(windows, n, side), base.name)
 
     def polish(n):
-        rho, width = _fields(windows, n, side)
-        return simulate(Layout(rho, cell, width, name), **sim)
+        return model.run(layout_of(n), time)
 
-    def evolve(rho, width, eff, t):
-        ev = DieEvolution(Layout(rho, cell, width, name), process, eff, blanket_rate, config.asperity_radius, fc)
+    def evolve(lay, eff, t):
+        ev = DieEvolution(lay, model.process, eff, model.blanket_rate, model.config.asperity_radius, model.feature)
         ev.advance_to(t)
         return ev.mean_height
 
-    before = polish(np.zeros(sites.shape))
+    if before is None:
+        before = polish(np.zeros(sites.shape))
     n = np.zeros(sites.shape)
     current = before
-    history = [thickness_range(before)]
+    history = [before.thickness_range]
     nsim = 1
     delta = 0.02
     for _ in range(max(int(iterations), 0)):
         x = n * step
-        rho, width = _fields(windows, n, side)
+        lay = layout_of(n)
         eff = current.effective_density
         t = current.time
         h0 = current.evolution.mean_height
         # a: d h / d rho_eff at fixed local fields; b: d h / d x at fixed rho_eff (one evolution each)
         up = np.where(eff + delta < 1.0, delta, -delta)
-        a = (evolve(rho, width, eff + up, t) - h0) / up
+        a = (evolve(lay, eff + up, t) - h0) / up
         dn = np.minimum(delta, cap - x)
         dn = np.where(dn > 1e-9, dn, -np.minimum(delta, x))
         ok = np.abs(dn) > 1e-9
-        rho_b, width_b = _fields(windows, n + np.where(ok, dn, 0.0) / step, side)
-        hb = evolve(rho_b, width_b, eff, t)
+        hb = evolve(layout_of(n + np.where(ok, dn, 0.0) / step), eff, t)
         b = np.where(ok, (hb - h0) / np.where(ok, dn, 1.0), 0.0)
         nsim += 2
         scale = max(float(np.ptp(h0)), 1e-15)
@@ -232,14 +252,14 @@ def plan_fill(windows, sites, *, config=None, blanket_rate: float | None = None,
 
         def objective(y):
             dx = y - x
-            h = h0 + a * effective_density(dx, cell, w) + b * dx
+            h = h0 + a * effective_density(gain * dx, cell, w) + b * dx
             z = beta * (h - h.max())
             zm = -beta * (h - h.min())
             ep, em = np.exp(z), np.exp(zm)
             sp, sm = ep.sum(), em.sum()
             f = (np.log(sp) / beta + h.max()) + (np.log(sm) / beta - h.min()) + price * y.sum()
             gh = ep / sp - em / sm
-            grad = effective_density(a * gh, cell, w) + b * gh + price
+            grad = gain * effective_density(a * gh, cell, w) + b * gh + price
             return f / scale, grad / scale
 
         target = _projected_descent(objective, x, np.zeros_like(x), cap, max_steps)
@@ -248,9 +268,9 @@ def plan_fill(windows, sites, *, config=None, blanket_rate: float | None = None,
             n_new = np.clip(np.rint(target / step), 0, sites.capacity)
             trial = polish(n_new)
             nsim += 1
-            if thickness_range(trial) < history[-1]:
+            if trial.thickness_range < history[-1]:
                 n, current = n_new, trial
-                history.append(thickness_range(trial))
+                history.append(trial.thickness_range)
                 accepted = True
                 break
             target = 0.5 * (target + x)
@@ -259,9 +279,8 @@ def plan_fill(windows, sites, *, config=None, blanket_rate: float | None = None,
     chosen = select_fill(sites, n)
     filled = filled_windows(windows, sites, chosen)
     after = current if n.any() else before
-    counter = hotspot_counter
     plan = FillPlan(counts=n.astype(np.int64), chosen=chosen, windows=filled, before=before, after=after,
-                    added_area=float(n.sum()) * side**2, limits=limits, history=history,
-                    summary_before=_summary(before, limits, counter), summary_after=_summary(after, limits, counter))
+                    added_area=float(n.sum()) * side**2, limits=dict(model.spec), history=history,
+                    summary_before=_summary(before, hotspot_counter), summary_after=_summary(after, hotspot_counter), sites=sites)
     plan.stats = {"seconds": _time.perf_counter() - t_start, "polishes": nsim, "windows": int(n.size)}
     return plan

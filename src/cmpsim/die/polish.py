@@ -98,6 +98,8 @@ class DieResult:
     spec: dict = field(default_factory=dict)
     #: the level's name in a stack (None: a single level)
     level: str | None = None
+    #: ``cmpsim die --fill``: the JSON ``fill`` object ({before, after, added_area, ...}); this die is then the filled one
+    fill: dict | None = None
 
     @property
     def thickness_range(self) -> float:
@@ -203,6 +205,9 @@ class DieResult:
                               "layers": [f"{a}/{b}" for a, b in lay.layers], "top": lay.name}
         else:
             out["regions"] = self.regions()
+        if self.fill is not None:
+            out["fill"] = dict(self.fill)
+            out["units"]["added_area"] = "m^2"
         return out
 
     def dataset(self):
@@ -222,6 +227,10 @@ class DieResult:
                    **{f"planarization_length_{k}_from_pad": self.conventions[k] for k in ("gaussian", "elliptic") if k in self.conventions}}
         scalars["thickness_range"] = self.thickness_range
         ds = _cf_dataset(("y", "x"), maps, MAP_OUTPUTS, scalars, coords, f"cmpsim die: {self.layout.name}, {self.process.kind}")
+        if self.fill is not None:
+            ds.attrs["fill"] = ("the maps are those of the die with the model-based fill added (cmpsim die --fill); "
+                                f"thickness range {self.fill['before']['thickness_range']:.6g} m drawn, "
+                                f"{self.fill['after']['thickness_range']:.6g} m filled; added area {self.fill['added_area']:.6g} m^2")
         if self.layout.windowed:
             ds.attrs["layers"] = ", ".join(f"{a}/{b}" for a, b in self.layout.layers)
             ds.attrs["window"] = f"{self.layout.cell_size:g} m"
@@ -260,7 +269,7 @@ class DieResult:
                 ax.plot([h["x"] * 1e3 for h in mark], [h["y"] * 1e3 for h in mark], "s", mfc="none", mec="red", ms=4, mew=0.8,
                         label=f"{len(mark)} hotspots")
                 ax.legend(loc="upper right", fontsize=7)
-        fig.suptitle(f"die {self.layout.name!r}, {self.process.kind}, t = {self.time:.0f} s, K = {self.blanket_rate * 6e10:.0f} nm/min, "
+        fig.suptitle(f"die {self.layout.name!r}{' with model-based fill' if self.fill is not None else ''}, {self.process.kind}, t = {self.time:.0f} s, K = {self.blanket_rate * 6e10:.0f} nm/min, "
                      f"PL = {self.planarization_length * 1e3:.2f} mm")
         return fig
 
