@@ -1,11 +1,12 @@
-"""Screenshots of the browser UI for docs/web.md: the solved page and a sweep.
+"""Screenshots of the browser UI for docs/web.md: the solved page, a sweep and the die view.
 
-    python docs/make_screenshots.py                # -> docs/web/solved.png, docs/web/sweep.png
+    python docs/make_screenshots.py                # -> docs/web/solved.png, sweep.png, die.png
     python docs/make_screenshots.py --grid coarse --out /tmp/shots
 
 Starts ``cmpsim serve``'s application on a free port of 127.0.0.1, drives the system Chromium
 with Playwright (no browser download: set CMPSIM_CHROMIUM to its path if it is not
-``chromium`` on PATH), solves 3 psi, runs a 9-point load sweep and saves the two pictures.
+``chromium`` on PATH), solves 3 psi, runs a 9-point load sweep, polishes a small copper die
+built here with gdstk (:func:`demo_layout`) and saves the three pictures.
 tests/test_web_browser.py runs :func:`take_screenshots` on every test run, so the script keeps
 working; the PNGs in docs/web/ are committed (the documentation build needs no browser).
 """
@@ -82,10 +83,53 @@ def take_screenshots(page, base_url: str, out: Path, grid: str = "default", swee
     return [solved, sweep]
 
 
+def demo_layout(path: Path) -> Path:
+    """A 400 um copper test chip (layer 1/0): 200 um blocks of 8 um lines at 10 um pitch (80 %)
+    and of 2 um lines (20 %) in a checkerboard, with a 2 um line array rotated in one corner."""
+    import gdstk
+
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+
+    def lines(name, width, vertical=True):
+        cell = gdstk.Cell(name)
+        for i in range(20):
+            a, b = (i * 10.0, 0.0), (i * 10.0 + width, 200.0)
+            cell.add(gdstk.rectangle(a, b, layer=1) if vertical else gdstk.rectangle(a[::-1], b[::-1], layer=1))
+        return cell
+
+    dense, sparse, across = lines("DENSE", 8.0), lines("SPARSE", 2.0), lines("ACROSS", 4.0, vertical=False)
+    top = gdstk.Cell("DEMO")
+    top.add(gdstk.Reference(dense, (0, 0)), gdstk.Reference(sparse, (200, 0)), gdstk.Reference(across, (0, 200)),
+            gdstk.Reference(dense, (200, 200)))
+    lib.add(dense, sparse, across, top)
+    lib.write_gds(str(path))
+    return Path(path)
+
+
+def take_die_screenshot(page, base_url: str, layout: Path, out: Path, grid: str = "default") -> Path:
+    """Upload ``layout`` in the die view (layer 1/0, copper, limits thickness 40 nm and dishing 95 nm), run it, save die.png."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    page.set_viewport_size(VIEWPORT)
+    wait_ready(page, base_url)
+    page.fill('#inputs [name="grid"]', grid)
+    page.set_input_files("#die-file", str(layout))
+    page.select_option("#die-pdk", "sky130")  # shows the PDK's named layers; the chip's layer is given as L/D
+    page.fill("#die-layers", "1/0")
+    page.select_option("#die-process", "copper")
+    page.fill("#die-spec-thickness", "40")
+    page.fill("#die-spec-dishing", "95")
+    page.click("#run-die")
+    page.wait_for_selector("#die-hotspots .main-svg", timeout=120_000)
+    shot = out / "die.png"
+    page.locator("#die-panel").screenshot(path=str(shot))
+    return shot
+
+
 def main(argv=None) -> int:
     here = Path(__file__).resolve().parent
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--out", type=Path, default=here / "web", help="folder for solved.png and sweep.png (default docs/web)")
+    ap.add_argument("--out", type=Path, default=here / "web", help="folder for solved.png, sweep.png and die.png (default docs/web)")
     ap.add_argument("--grid", default="default", help="grid of the solve and the sweep (default: default)")
     args = ap.parse_args(argv)
     from playwright.sync_api import sync_playwright
@@ -99,6 +143,10 @@ def main(argv=None) -> int:
             page = browser.new_page()
             for path in take_screenshots(page, server.url, args.out, args.grid):
                 print(f"wrote {path}")
+            import tempfile
+
+            with tempfile.TemporaryDirectory() as tmp:
+                print(f"wrote {take_die_screenshot(page, server.url, demo_layout(Path(tmp) / 'demo.gds'), args.out, args.grid)}")
         finally:
             browser.close()
     return 0

@@ -487,7 +487,8 @@ def test_the_docs_page_states_the_limits_and_messages_the_code_has():
     text = (Path(__file__).resolve().parents[1] / "docs" / "web.md").read_text(encoding="utf-8")
     defaults = {p.opts[0]: p.default for p in serve_command.params if p.opts[0].startswith("--max-")}
     lim = Limits()
-    assert defaults == {"--max-grid": lim.max_grid, "--max-sweep-points": lim.max_sweep_points, "--max-jobs": lim.max_jobs, "--max-body": lim.max_body_bytes}
+    assert defaults == {"--max-grid": lim.max_grid, "--max-sweep-points": lim.max_sweep_points, "--max-jobs": lim.max_jobs, "--max-body": lim.max_body_bytes,
+                        "--max-upload": lim.max_upload_bytes, "--max-windows": lim.max_windows}
     for option, default in defaults.items():
         assert f"| `{option}` | `{default}` |" in text, option
     n_r, n_t, cells = grid_cells(lim.max_grid)
@@ -504,7 +505,7 @@ def test_the_web_form_offers_the_abrasive_inputs_with_units_and_choices(client):
     assert by_name["solids_loading"]["display_unit"] == "%" and by_name["solids_loading"]["default_display"] == "12.5"
     assert by_name["particle_size_std"]["display_unit"] == "nm"
     assert by_name["abrasive"]["choices"] == ["silica", "ceria", "alumina"]
-    assert by_name["film"]["choices"] == ["oxide", "copper", "tungsten"]
+    assert by_name["film"]["choices"] == ["oxide", "copper", "tungsten", "barrier"]  # the Ta barrier joined the film table in issue 32
     assert by_name["removal_kinetics"]["choices"] == ["mechanical", "two_step"]
     assert "abrasive" in by_name["removal_law"]["choices"] and by_name["removal_law"]["default_display"] == "abrasive"
 
@@ -519,3 +520,233 @@ def test_tune_zones_answers_the_object_of_the_command(client):
     assert data["within_wafer_nonuniformity"] == pytest.approx(cli["within_wafer_nonuniformity"], rel=1e-6)
     bad = client.post("/api/tune-zones", json={"grid": "8x24"})
     assert bad.status_code == 422 and "tune_zones needs carrier = 'membrane'" in bad.text
+
+
+# ---------------------------------------------------------------------------- the die on an uploaded layout
+
+
+def _chip(path: Path, steps: int = 2, fmt: str = "gds") -> Path:
+    """A 200 um tile of 8 um lines at 10 um pitch (80 %) beside one of 2 um lines (20 %), stepped
+    steps x steps (hierarchical); layer 1/0, plus an outline on 100/0 and a cell of 5/0 nobody uses."""
+    import gdstk
+
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+
+    def lines(name, width):
+        cell = gdstk.Cell(name)
+        for i in range(10):
+            cell.add(gdstk.rectangle((i * 10.0, 0), (i * 10.0 + width, 100.0), layer=1))
+        return cell
+
+    dense, sparse = lines("DENSE", 8.0), lines("SPARSE", 2.0)
+    tile = gdstk.Cell("TILE")
+    tile.add(gdstk.Reference(dense, (0, 0)), gdstk.Reference(sparse, (100, 0)), gdstk.Reference(sparse, (0, 100)), gdstk.Reference(dense, (100, 100)))
+    top = gdstk.Cell("CHIP")
+    top.add(gdstk.Reference(tile, (0, 0), columns=steps, rows=steps, spacing=(200.0, 200.0)))
+    top.add(gdstk.rectangle((0, 0), (200.0 * steps, 200.0 * steps), layer=100))
+    lib.add(dense, sparse, tile, top)
+    if fmt == "oas":
+        lib.write_oas(str(path))
+    else:
+        lib.write_gds(str(path))
+    return path
+
+
+DIE_QUERY = {"layer": "1/0", "process": "copper", "spec": ["thickness=30nm", "dishing=50nm"], "inputs": json.dumps({"grid": "coarse"})}
+
+
+def _post_die(client, path: Path, **query):
+    params = {**DIE_QUERY, "filename": path.name, **query}
+    return client.post("/api/die", params=params, content=path.read_bytes(), headers={"content-type": "application/octet-stream"})
+
+
+def test_die_answers_the_object_cmpsim_die_layout_json_prints(client, tmp_path):
+    path = _chip(tmp_path / "chip.gds")
+    r = _post_die(client, path)
+    assert r.status_code == 200, r.text
+    args = ["die", str(path), "--layer", "1/0", "--process", "copper", "--spec", "thickness=30nm", "--spec", "dishing=50nm", "--grid", "coarse", "--json"]
+    res = CliRunner().invoke(main, args)
+    assert res.exit_code == 0, res.output
+    cli = json.loads(res.stdout)
+    assert r.json() == cli  # the same functions, the same object
+    assert cli["hotspot_count"] > 0 and cli["thickness_range"] > 0 and "maps" not in r.json()
+    # include=maps adds the per-window maps on the window centres, and changes nothing else
+    m = _post_die(client, path, include="maps").json()
+    maps = m.pop("maps")
+    assert m == cli
+    assert list(maps["maps"]) == ["density", "thickness", "step_height", "dishing", "erosion"]
+    assert maps["x"] == pytest.approx([(i + 0.5) * 20e-6 for i in range(20)]) and len(maps["y"]) == 20
+    density = np.array(maps["maps"]["density"]["z"])
+    assert density.shape == (20, 20)
+    assert density[0, 0] == pytest.approx(0.8, abs=1e-6) and density[0, 5] == pytest.approx(0.2, abs=1e-6)
+    chosen = _post_die(client, path, include="maps", maps="erosion").json()["maps"]["maps"]
+    assert list(chosen) == ["erosion"]
+    bad = _post_die(client, path, include="maps", maps="nope")
+    assert bad.status_code == 422 and bad.json()["parameter"] == "maps"
+
+
+@pytest.mark.parametrize("fmt", ["gds.gz", "oas"])
+def test_die_reads_gzipped_gds_and_oasis_as_the_gds(client, tmp_path, fmt):
+    import gzip
+
+    gds = _chip(tmp_path / "chip.gds")
+    if fmt == "oas":
+        path = _chip(tmp_path / "chip.oas", fmt="oas")
+    else:
+        path = tmp_path / "chip.gds.gz"
+        path.write_bytes(gzip.compress(gds.read_bytes()))
+    a = _post_die(client, gds, include="maps", maps="density").json()
+    b = _post_die(client, path, include="maps", maps="density").json()
+    assert np.array(b["maps"]["maps"]["density"]["z"]) == pytest.approx(np.array(a["maps"]["maps"]["density"]["z"]), abs=1e-9)
+    assert b["hotspot_count"] == a["hotspot_count"]
+
+
+def _empty_layer_chip(path: Path) -> Path:
+    """Layer 5/0 only in a cell outside the top cell CHIP: an empty layer under CHIP."""
+    import gdstk
+
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+    top, spare = gdstk.Cell("CHIP"), gdstk.Cell("SPARE")
+    top.add(gdstk.rectangle((0, 0), (100, 100), layer=1))
+    spare.add(gdstk.rectangle((0, 0), (10, 10), layer=5))
+    lib.add(top, spare)
+    lib.write_gds(str(path))
+    return path
+
+
+@pytest.mark.parametrize(
+    "case, query, parameter",
+    [
+        ("not a layout", {}, "layout"),
+        ("missing layer", {"layer": "2/0"}, "layer"),
+        ("unknown PDK layer", {"layer": "met9", "pdk": "sky130"}, "layer"),
+        ("PDK layer the file lacks", {"layer": "met1", "pdk": "sky130"}, "layer"),
+        ("window larger than the die", {"window": "1 mm"}, "window"),
+        ("empty layer", {"layer": "5/0", "top": "CHIP"}, "layer"),
+        ("several top cells", {"layer": "1/0"}, "top"),
+    ],
+)
+def test_bad_die_input_is_422_with_cmpsims_own_message_naming_the_parameter(client, tmp_path, case, query, parameter):
+    from cmpsim.die.chip import layout_die
+
+    if case == "not a layout":
+        path = tmp_path / "notes.gds"
+        path.write_text("these are notes, not a layout\n")
+    elif case in ("empty layer", "several top cells"):
+        path = _empty_layer_chip(tmp_path / "chip.gds")
+    else:
+        path = _chip(tmp_path / "chip.gds")
+    q = {"layer": "1/0", "window": "20 um", **query}
+    with pytest.raises(ValueError) as info:  # what `cmpsim die LAYOUT` says, on the same file
+        layout_die(path, [q["layer"]], to_si_m(q["window"]), top=q.get("top"), pdk=q.get("pdk"))
+    r = _post_die(client, path, **query)
+    assert r.status_code == 422, r.text
+    body = r.json()
+    assert body["parameter"] == parameter
+    assert body["detail"] == str(info.value).replace(str(path), path.name)
+    assert str(tmp_path) not in body["detail"]  # never the server's folders
+    if case == "missing layer":
+        assert "'2/0'" in body["detail"] and "1/0, 100/0" in body["detail"]  # the layer named, the file's layers listed
+    if case == "unknown PDK layer":
+        assert "'met9'" in body["detail"] and "met1" in body["detail"]
+
+
+def to_si_m(text: str) -> float:
+    from cmpsim.inputs.units import to_si
+
+    return to_si(text, "m", "window", "20 um")
+
+
+@pytest.mark.parametrize(
+    "query, parameter, words",
+    [
+        ({"layer": ""}, "layer", "at least one layer"),
+        ({"pdk": "tsmc"}, "pdk", "pdk 'tsmc' is unknown"),
+        ({"window": "3 kg"}, "window", "wrong dimension"),
+        ({"spec": "flatness=3nm"}, "spec", "not a quantity with a limit"),
+        ({"process": "tin"}, "process", "process"),
+        ({"inputs": '{"applied_pressure": "-3 psi"}'}, "applied_pressure", "out of range"),
+        ({"inputs": "{oops"}, "inputs", "not valid JSON"),
+    ],
+)
+def test_a_bad_die_query_is_422_before_the_upload_is_read(client, tmp_path, query, parameter, words):
+    r = _post_die(client, _chip(tmp_path / "chip.gds"), **query)
+    assert r.status_code == 422 and r.json()["parameter"] == parameter and words in r.json()["detail"], r.text
+
+
+def test_an_empty_upload_is_422_naming_the_layout(client):
+    r = client.post("/api/die", params={"layer": "1/0"}, content=b"")
+    assert r.status_code == 422 and r.json()["parameter"] == "layout" and "empty" in r.json()["detail"]
+
+
+def test_the_layout_upload_has_its_own_size_limit(tmp_path):
+    """/api/die takes a layout over --max-body (the JSON routes' limit) up to --max-upload; beyond, 413 naming --max-upload."""
+    path = _chip(tmp_path / "chip.gds")
+    size = path.stat().st_size
+    app = create_app(Limits(max_grid="default", max_body_bytes=1024, max_upload_bytes=size + 10), workers=1)
+    with TestClient(app) as c:
+        assert size > 1024 and _post_die(c, path).status_code == 200
+        big = tmp_path / "big.gds"
+        big.write_bytes(path.read_bytes() + b"\0" * 20)
+        r = _post_die(c, big)
+        assert r.status_code == 413 and "--max-upload" in r.json()["detail"] and "uploaded layout" in r.json()["detail"]
+
+        def chunks():  # no Content-Length: the server counts what arrives
+            for _ in range(4):
+                yield b"\0" * (size // 2)
+
+        r = c.post("/api/die", params=DIE_QUERY, content=chunks())
+        assert r.status_code == 413 and "--max-upload" in r.json()["detail"]
+        assert c.post("/api/solve", content=b" " * 2048, headers={"content-type": "application/json"}).status_code == 413  # others keep --max-body
+
+
+def test_a_die_of_more_windows_than_the_limit_is_refused_naming_window(tmp_path):
+    app = create_app(Limits(max_grid="default", max_windows=100), workers=1)
+    with TestClient(app) as c:
+        r = _post_die(c, _chip(tmp_path / "chip.gds"))  # 400 um at 20 um: 400 windows
+        assert r.status_code == 422 and r.json()["parameter"] == "window" and "--max-windows" in r.json()["detail"]
+        assert _post_die(c, _chip(tmp_path / "chip.gds"), window="40 um").status_code == 200
+
+
+def test_the_upload_is_removed_and_the_run_holds_a_job_slot(tmp_path, monkeypatch):
+    import tempfile
+
+    import cmpsim.die
+
+    scratch = tmp_path / "scratch"
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
+    app = create_app(Limits(max_grid="default", max_jobs=1, retry_after_s=3), workers=1)
+    seen = []
+    simulate = cmpsim.die.simulate
+
+    def watched(*args, **kwargs):
+        seen.append((app.state.slots.used, sorted(p.name for p in scratch.rglob("*"))))
+        return simulate(*args, **kwargs)
+
+    monkeypatch.setattr(cmpsim.die, "simulate", watched)
+    path = _chip(tmp_path / "chip.gds")
+    with TestClient(app) as c:
+        assert _post_die(c, path).status_code == 200
+        assert seen[0][0] == 1 and "chip.gds" in seen[0][1]  # the run held the slot; the upload was on disk
+        assert list(scratch.iterdir()) == []  # and is gone
+        assert _post_die(c, path, layer="2/0").status_code == 422
+        assert list(scratch.iterdir()) == []  # also after a refusal
+        app.state.slots.take()
+        try:
+            r = _post_die(c, path)
+            assert r.status_code == 429 and r.headers["retry-after"] == "3"
+        finally:
+            app.state.slots.give_back()
+        assert list(scratch.iterdir()) == [] and app.state.slots.used == 0
+
+
+def test_layer_maps_lists_the_named_layers_of_the_open_pdks(client):
+    from cmpsim.layout import PDK_LAYER_MAPS
+
+    maps = client.get("/api/layer-maps").json()
+    assert sorted(maps) == ["gf180mcu", "sg13g2", "sky130"]
+    assert maps["sky130"]["met1"] == ["68/20", "36/28"]
+    assert {p: {n: [tuple(map(int, s.split("/"))) for s in v] for n, v in m.items()} for p, m in maps.items()} == {
+        p: {n: list(v) for n, v in m.items()} for p, m in PDK_LAYER_MAPS.items()
+    }

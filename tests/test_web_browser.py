@@ -263,3 +263,83 @@ def test_the_docs_screenshot_script_makes_both_pictures(page, server, tmp_path):
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 10_000
     committed = ROOT / "docs" / "web"
     assert {p.name for p in made} <= {p.name for p in committed.glob("*.png")}, "run python docs/make_screenshots.py"
+
+
+# ---------------------------------------------------------------------------- the die view
+
+
+def _chip(path: Path) -> Path:
+    """A 400 um chip built here with gdstk: 200 um blocks of 8 um lines at 10 um pitch (80 %) and of
+    2 um lines (20 %) in a checkerboard, on layer 1/0."""
+    import gdstk
+
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+
+    def lines(name, width):
+        cell = gdstk.Cell(name)
+        for i in range(20):
+            cell.add(gdstk.rectangle((i * 10.0, 0), (i * 10.0 + width, 200.0), layer=1))
+        return cell
+
+    dense, sparse = lines("DENSE", 8.0), lines("SPARSE", 2.0)
+    top = gdstk.Cell("CHIP")
+    top.add(gdstk.Reference(dense, (0, 0)), gdstk.Reference(sparse, (200, 0)), gdstk.Reference(sparse, (0, 200)), gdstk.Reference(dense, (200, 200)))
+    lib.add(dense, sparse, top)
+    lib.write_gds(str(path))
+    return path
+
+
+def test_the_die_view_uploads_a_layout_and_shows_the_three_maps_and_the_hotspots(page, server, tmp_path):
+    from click.testing import CliRunner
+
+    from cmpsim.cli import main
+    from cmpsim.layout import PDK_LAYER_MAPS
+
+    path = _chip(tmp_path / "chip.gds")
+    _open(page, server)
+    assert page.is_disabled("#run-die")  # nothing to run before a file is chosen
+    page.set_input_files("#die-file", str(path))
+    # a PDK lists its named layers once chosen
+    page.select_option("#die-pdk", "gf180mcu")
+    names = page.eval_on_selector_all('#die-pdk-layers input[name="die-pdk-layer"]', "cbs => cbs.map(c => c.value)")
+    assert names == list(PDK_LAYER_MAPS["gf180mcu"])
+    page.select_option("#die-pdk", "sky130")
+    names = page.eval_on_selector_all('#die-pdk-layers input[name="die-pdk-layer"]', "cbs => cbs.map(c => c.value)")
+    assert names == list(PDK_LAYER_MAPS["sky130"])
+    # a named layer the chip lacks: cmpsim's message, the layers control marked
+    page.check('#die-pdk-layers input[value="met2"]')
+    page.click("#run-die")
+    page.wait_for_selector("#die-message:not([hidden])")
+    assert "layer 'met2' (69/20, 41/28) is not in chip.gds; its layers are: 1/0" in page.text_content("#die-message")
+    assert page.get_attribute("#die-layers", "aria-invalid") == "true"
+    # the chip's own layer, copper, two limits
+    page.uncheck('#die-pdk-layers input[value="met2"]')
+    page.fill("#die-layers", "1/0")
+    page.select_option("#die-process", "copper")
+    page.fill("#die-spec-thickness", "30")
+    page.fill("#die-spec-dishing", "50")
+    page.click("#run-die")
+    page.wait_for_selector("#die-hotspots .main-svg")
+    assert page.is_hidden("#die-message")
+    res = CliRunner().invoke(main, ["die", str(path), "--layer", "1/0", "--process", "copper", "--spec", "thickness=30nm",
+                                    "--spec", "dishing=50nm", "--grid", "coarse", "--json"])
+    assert res.exit_code == 0, res.output
+    cli = json.loads(res.stdout)
+    assert cli["hotspot_count"] > 0
+    assert page.text_content("#die-count") == str(cli["hotspot_count"])
+    # the three maps: density (in %), the final surface with the hotspots as markers, the hotspot map
+    density = page.evaluate("document.getElementById('die-density').data[0]")
+    assert density["type"] == "heatmap" and len(density["z"]) == 20 and density["z"][0][0] == pytest.approx(80.0, abs=1e-3)
+    height = page.evaluate("document.getElementById('die-height').data.map(t => [t.type, t.x.length])")
+    assert height[0] == ["heatmap", 20] and height[1] == ["scatter", min(cli["hotspot_count"], 5000)]
+    assert page.evaluate("document.getElementById('die-hotspots').data[0].type") == "heatmap"
+    # the scalars of the JSON of a single-level run, each with its SI value on hover
+    for key in ("hotspot_count", "thickness_range", "dishing_max", "time"):
+        assert float(page.get_attribute(f'#die-results td[data-key="{key}"]', "title")) == pytest.approx(cli[key], rel=1e-12), key
+    assert page.is_visible("#download-die-json")
+
+
+def test_the_docs_screenshot_script_makes_the_die_picture(page, server, tmp_path):
+    shot = SHOTS.take_die_screenshot(page, server.url, SHOTS.demo_layout(tmp_path / "demo.gds"), tmp_path, grid="coarse")
+    assert shot.name == "die.png" and shot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and shot.stat().st_size > 10_000
+    assert (ROOT / "docs" / "web" / "die.png").is_file(), "run python docs/make_screenshots.py"

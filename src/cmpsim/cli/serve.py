@@ -15,14 +15,17 @@ from .group import _fail, _warn, main
 @click.option("--max-sweep-points", type=click.IntRange(min=1), default=1000, show_default=True, help="Largest sweep (points) and validation upload (rows).")
 @click.option("--max-jobs", type=click.IntRange(min=1), default=2, show_default=True, help="Solves, validations and sweeps running at once; more get HTTP 429 with Retry-After.")
 @click.option("--max-body", type=click.IntRange(min=1024), default=1_048_576, show_default=True, help="Largest request body in bytes; larger gets HTTP 413.")
+@click.option("--max-upload", type=click.IntRange(min=1024), default=52_428_800, show_default=True, help="Largest uploaded layout (POST /api/die) in bytes; larger gets HTTP 413.")
+@click.option("--max-windows", type=click.IntRange(min=1), default=1_000_000, show_default=True, help="Most windows of a die on an uploaded layout; more gets HTTP 422 naming window.")
 @click.option("--workers", type=click.IntRange(min=1), default=None, help="Worker processes of the local Dask cluster of the sweeps (default: the machine's cores).")
 @click.option("--scheduler", metavar="ADDRESS", help="Run the sweeps on an existing Dask cluster, e.g. tcp://host:8786.")
-def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_body, workers, scheduler):
+def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_body, max_upload, max_windows, workers, scheduler):
     """Start the browser UI and the JSON HTTP API (needs the extra: pip install "cmpsim[web]").
 
-    The page at / solves operating points, draws the wafer maps and runs sweeps; the API
-    (/api/solve, /api/sweeps, /api/validate, ...; reference at /api/docs) answers what
-    `cmpsim run --json`, `cmpsim sweep` and `cmpsim validate` give. See docs/web.md.
+    The page at / solves operating points, draws the wafer maps, runs sweeps and polishes a
+    die on an uploaded layout; the API (/api/solve, /api/sweeps, /api/validate, /api/die, ...;
+    reference at /api/docs) answers what `cmpsim run --json`, `cmpsim sweep`, `cmpsim validate`
+    and `cmpsim die LAYOUT --json` give. See docs/web.md.
     """
     from ..web import INSTALL_HINT
 
@@ -34,7 +37,8 @@ def serve_command(host, port, token, max_grid, max_sweep_points, max_jobs, max_b
     except ImportError as exc:
         _fail(f"`cmpsim serve` needs the web extra ({exc.name or exc} is missing): {INSTALL_HINT}")
     try:
-        limits = Limits(max_grid=max_grid, max_sweep_points=max_sweep_points, max_jobs=max_jobs, max_body_bytes=max_body)
+        limits = Limits(max_grid=max_grid, max_sweep_points=max_sweep_points, max_jobs=max_jobs, max_body_bytes=max_body,
+                        max_upload_bytes=max_upload, max_windows=max_windows)
     except ValueError as exc:
         _fail(str(exc).replace("max_grid:", "--max-grid:"))
     if workers is not None and scheduler is not None:

@@ -8,11 +8,13 @@ cluster, as ``cmpsim sweep`` does. Nothing in this package knows physics.
 Modules: :mod:`~cmpsim.web.app` (the FastAPI application, :func:`~cmpsim.web.app.create_app`,
 put together from the others), :mod:`~cmpsim.web.payloads` (request bodies to a Config,
 answers to JSON, the 422 of bad input), :mod:`~cmpsim.web.page` (the page's files),
-:mod:`~cmpsim.web.sweep_routes` (the sweep routes), :mod:`~cmpsim.web.jobs` (background
+:mod:`~cmpsim.web.sweep_routes` (the sweep routes), :mod:`~cmpsim.web.die_routes` (the die model
+on an uploaded layout, as ``cmpsim die LAYOUT``), :mod:`~cmpsim.web.jobs` (background
 sweeps), :mod:`~cmpsim.web.guard` (the token), :mod:`~cmpsim.web.limits` (what one client may
 ask of the machine), :mod:`~cmpsim.web.server` (running it with uvicorn). The page itself is
 ``static/``: HTML, CSS and ES modules by job (``app.js`` starts the page and imports
-``page.js``, ``http.js``, ``form.js``, ``results.js``, ``plots.js``, ``sweep.js``, ``tune.js``); its
+``page.js``, ``http.js``, ``form.js``, ``results.js``, ``plots.js``, ``sweep.js``, ``tune.js``,
+``die.js``); its
 plotting library is the plotly.js bundled in the installed ``plotly`` wheel, so no request
 leaves the machine.
 

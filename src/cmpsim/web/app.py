@@ -3,14 +3,17 @@
 Every route ends in the Python API: ``/api/solve`` in :meth:`cmpsim.inputs.config.Config.from_mapping`,
 :func:`cmpsim.solve` and :meth:`cmpsim.results.result.Result.to_json` (the object ``cmpsim run --json``
 prints); ``/api/sweeps`` in :func:`cmpsim.sweeps.sweep` (see :mod:`cmpsim.web.jobs`);
-``/api/validate`` in :func:`cmpsim.validation.validate`. Bad input gets HTTP 422 with cmpsim's
+``/api/validate`` in :func:`cmpsim.validation.validate`; ``/api/die`` (an uploaded layout) in
+:func:`cmpsim.die.chip.layout_die` and :func:`cmpsim.die.simulate`, as ``cmpsim die LAYOUT`` (see
+:mod:`cmpsim.web.die_routes`). Bad input gets HTTP 422 with cmpsim's
 own message and the parameter it names (``{"detail": ..., "parameter": ...}``); nothing the
 server does wrong shows a traceback to the client.
 
 The application is put together here from rooms of its own: :mod:`~cmpsim.web.payloads`
 (request bodies to a Config, answers to JSON, :class:`InputError`), :mod:`~cmpsim.web.page`
 (the page's files), :mod:`~cmpsim.web.sweep_routes` (the sweep routes over
-:mod:`~cmpsim.web.jobs`) and :mod:`~cmpsim.web.guard` (the token).
+:mod:`~cmpsim.web.jobs`), :mod:`~cmpsim.web.die_routes` (a layout uploaded, the die model run on it)
+and :mod:`~cmpsim.web.guard` (the token).
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from starlette.concurrency import run_in_threadpool
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from .. import __version__
+from .die_routes import die_routes
 from .guard import TOKEN_COOKIE, TokenGuard
 from .jobs import SweepJobs
 from .limits import BodySizeLimit, Busy, JobSlots, LimitError, Limits
@@ -92,7 +96,7 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
     app.state.limits = limits
     app.state.slots = slots
     app.state.jobs = jobs
-    app.add_middleware(BodySizeLimit, max_bytes=limits.max_body_bytes)
+    app.add_middleware(BodySizeLimit, max_bytes=limits.max_body_bytes, max_upload=limits.max_upload_bytes)
     if token:
         app.add_middleware(TokenGuard, token=token)
 
@@ -230,6 +234,9 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
 
     # ------------------------------------------------------------------ API: sweeps
     app.include_router(sweep_routes(limits, slots, jobs))
+
+    # ------------------------------------------------------------------ API: the die on an uploaded layout
+    app.include_router(die_routes(limits, slots))
 
     # ------------------------------------------------------------------ API: validation
     @app.post(

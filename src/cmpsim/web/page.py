@@ -32,6 +32,7 @@ STATIC_FILES = {
     "plots.js": _JS,
     "sweep.js": _JS,
     "tune.js": _JS,
+    "die.js": _JS,
     # the local page of the HTTP API
     "api.html": "text/html; charset=utf-8",
     "api.js": _JS,

@@ -27,6 +27,7 @@ __all__ = [
     "config_from_request",
     "finite",
     "fields_payload",
+    "maps_payload",
     "params_payload",
     "outputs_payload",
     "validation_payload",
@@ -109,18 +110,21 @@ def finite(v):
     return v
 
 
-def fields_payload(result, names: list[str] | None) -> dict:
-    """The wafer maps of :attr:`cmpsim.results.result.Result.fields` as JSON (NaN outside the wafer -> null)."""
+def maps_payload(ds, names: list[str] | None, parameter: str = "fields", default: list[str] | None = None) -> dict:
+    """The (y, x) maps of an ``xarray.Dataset`` as JSON: ``x``, ``y``, ``units`` and ``maps`` {name: {units, long_name, z}}.
+
+    ``names`` chooses the maps (unknown ones: :class:`InputError` naming ``parameter``); else
+    ``default``, else every map. A value that is not finite goes out as null.
+    """
     import numpy as np
 
-    ds = result.fields
     available = [k for k in ds.data_vars if ds[k].dims == ("y", "x")]
     if names:
         unknown = [n for n in names if n not in available]
         if unknown:
-            raise InputError(f"fields: unknown field(s) {', '.join(unknown)}; available: {', '.join(available)}", "fields")
+            raise InputError(f"{parameter}: unknown field(s) {', '.join(unknown)}; available: {', '.join(available)}", parameter)
     else:
-        names = available
+        names = [n for n in default if n in available] if default else available
     maps = {}
     for name in names:
         z = np.asarray(ds[name].values, dtype=float)
@@ -132,6 +136,11 @@ def fields_payload(result, names: list[str] | None) -> dict:
         "units": {"x": ds["x"].attrs.get("units", "m"), "y": ds["y"].attrs.get("units", "m")},
         "maps": maps,
     }
+
+
+def fields_payload(result, names: list[str] | None) -> dict:
+    """The wafer maps of :attr:`cmpsim.results.result.Result.fields` as JSON (NaN outside the wafer -> null)."""
+    return maps_payload(result.fields, names, "fields")
 
 
 def params_payload() -> dict:

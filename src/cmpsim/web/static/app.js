@@ -3,7 +3,8 @@
 // number gets the display unit appended), and draws what the API answers. This module starts
 // the page and solves one point; the others each do one job: page.js (state, messages),
 // http.js (the API), form.js (the inputs), results.js (the table, downloads), plots.js (maps,
-// profile), sweep.js (the sweep panel), tune.js (zone tuning of a membrane head).
+// profile), sweep.js (the sweep panel), tune.js (zone tuning of a membrane head), die.js (the
+// die model on an uploaded layout).
 
 import { state, $, showMessage, beginAction, showActionError } from "./page.js";
 import { api, errorText } from "./http.js";
@@ -12,6 +13,7 @@ import { OUTPUTS, renderResults, setDownloads, downloadNetcdf } from "./results.
 import { ensurePlotly, renderPlots } from "./plots.js";
 import { syncTuneButton, tuneZones } from "./tune.js";
 import { buildSweepPanel, runSweep, cancelSweep, drawSweep } from "./sweep.js";
+import { buildDiePanel } from "./die.js";
 
 async function solve() {
   const body = collectInputs();
@@ -52,8 +54,11 @@ async function main() {
   $("version").textContent = `version ${params.data.cmpsim_version}`;
   if (info.ok) {
     const l = info.data.limits;
+    state.limits = l;
     $("version").textContent += ` \u00b7 limits: grid up to ${l.max_grid} (${l.max_grid_cells} cells), sweeps up to ${l.max_sweep_points} points, ${l.max_jobs} jobs at once`;
+    if (l.max_upload_bytes) $("die-limit").textContent = `at most ${Number((l.max_upload_bytes / 1048576).toPrecision(3))} MiB and ${l.max_windows} windows`;
   }
+  await buildDiePanel();
   $("solve").addEventListener("click", solve);
   $("reset").addEventListener("click", () => { resetForm(); syncTuneButton(); });
   $("tune-zones").addEventListener("click", tuneZones);

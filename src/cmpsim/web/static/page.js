@@ -1,6 +1,6 @@
 // Shared by the page's modules: its state, element lookup, number format and messages.
 
-export const state = { params: [], byName: {}, result: null, body: null, sweep: null, source: null };
+export const state = { params: [], byName: {}, result: null, body: null, sweep: null, source: null, limits: null };
 
 export const $ = (id) => document.getElementById(id);
 
