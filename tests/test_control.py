@@ -43,7 +43,7 @@ def test_the_zone_feedback_flattens_a_linear_plant():
         rate = base + response @ (np.array(state.zone_pressures) - 3 * PSI)
         final = 1e-6 - rate * time
         spreads.append(np.sqrt(np.sum(w * (final - np.sum(w * final)) ** 2)))
-        state = zone_correction(controller, state, r, final, response, time)
+        state = zone_correction(controller, state, w, final, response, time)
     assert spreads[-1] < 1e-3 * spreads[0], spreads
     assert state.zone_pressures != (3 * PSI,) * 4  # the controller moved the zones
     assert sum(state.zone_pressures) == pytest.approx(4 * 3 * PSI, rel=1e-12)  # and kept the load (equal zone areas)

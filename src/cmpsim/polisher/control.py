@@ -95,7 +95,7 @@ def area_weights(radius) -> np.ndarray:
 def zone_correction(
     controller: EWMAController,
     state: ControllerState,
-    radius,
+    weights,
     final_thickness,
     response,
     polish_time: float,
@@ -103,14 +103,16 @@ def zone_correction(
 ) -> ControllerState:
     """The zone pressures for the next wafer from the last wafer's remaining thickness (m at each radius).
 
+    ``weights`` are the radii's shares of the wafer area (e.g. the film stack's ring areas, or
+    :func:`area_weights` of the radii); they need not sum to 1.
+
     ``response`` is d rate(r) / d P_k (m/s/Pa, radii x zones) at the current pressures; the shape
     of the remaining thickness about its area mean is filtered (EWMA) and removed in
     ``polish_time`` (s) by the bounded, regularised least-squares pressure change that keeps the
     load (``zone_areas``, m^2, the weights of the zones' pressures in the load; equal by default).
     """
-    radius = np.asarray(radius, dtype=float)
     final = np.asarray(final_thickness, dtype=float)
-    w = area_weights(radius)
+    w = np.asarray(weights, dtype=float) / float(np.sum(weights))
     error = final - np.sum(w * final)
     filtered = error if state.profile_error is None else controller.zone_weight * error + (1.0 - controller.zone_weight) * state.profile_error
     shape = np.asarray(response, dtype=float)

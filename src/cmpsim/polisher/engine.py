@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import math
 import time as _time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -313,9 +313,8 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         if stack is None:
             stack = _initial_stack(recipe, sol, incoming)
             initial = stack
-        elif not np.array_equal(sol.ring_faces, stack_faces):
+        elif not np.array_equal(sol.radius, stack.radius):  # the stack holds the first step's rings
             raise RecipeError(f"{recipe.source}: {step.label}: its grid or wafer differs from the first step's; every step must polish the same wafer on the same grid")
-        stack_faces = sol.ring_faces
         column = _column(cfg, columns)
         thermal = pad.thermal if pad.thermal is not None else column.initial_state()
         if thermal.temperature.shape[-1] != column.size:

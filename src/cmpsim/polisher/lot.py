@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..results.uniformity import weighted_std_over_mean
 from ..physics.padlife import CONDITIONING, ConditionerDisk, FreshPad, PadLifeState, advance_pad_life, condition_ex_situ, summit_constants
 from .control import ControllerState, EWMAController, feed_forward_time, update_rate, zone_correction
 from .engine import PadState, idle, polish
@@ -150,11 +151,6 @@ def _controlled_step(recipe) -> int:
     if not timed:
         raise RecipeError(f"{recipe.source}: a controlled lot needs a timed step (time = ...) whose polish time the controller sets; every step ends at an end point")
     return timed[-1]
-
-
-def _nonuniformity(thickness, weights) -> float:
-    mean = float(np.sum(weights * thickness))
-    return float(np.sqrt(np.sum(weights * (thickness - mean) ** 2)) / mean) if mean > 0 else math.nan
 
 
 def run_lot(
@@ -283,7 +279,7 @@ def run_lot(
                 polish_time=float(total_time),
                 removal_rate_mean=float(sum(s.removed_volume for s in result.steps) / result.final.wafer_area / total_time) if total_time > 0 else 0.0,
                 final_thickness_mean=float(np.sum(weights * final)),
-                final_thickness_nonuniformity=_nonuniformity(final, weights),
+                final_thickness_nonuniformity=weighted_std_over_mean(final, weights),
                 zone_pressures=tuple(float(p) for p in pressures),
                 incoming_mean=inc_mean,
                 pad_temperature_end=result.pad_state.surface_temperature,
@@ -302,7 +298,7 @@ def run_lot(
             controlled_time = wafer_recipe.steps[step_k].time
             state = update_rate(state, removed, total_time, controller.weight)
             if zoned:
-                state = zone_correction(controller, state, radius, final, response, controlled_time, zone_areas)
+                state = zone_correction(controller, state, weights, final, response, controlled_time, zone_areas)
     return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves, _time.perf_counter() - t0)
 
 
@@ -319,24 +315,9 @@ def lot_csv(result: LotResult) -> str:
 
 def write_lot(result: LotResult, out_dir) -> list:
     """Write lot.json, lot.csv and lot.png into ``out_dir`` (each atomically, all computed first)."""
-    import io as _io
     import json
-    from pathlib import Path
 
-    import matplotlib.pyplot as plt
+    from .report import write_files
 
-    from ..io import atomic_path, atomic_write_text
-
-    out_dir = Path(out_dir)
-    text, csv_text = json.dumps(result.to_dict(), indent=1), lot_csv(result)
-    fig = result.plot()
-    try:
-        buf = _io.BytesIO()
-        fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
-    finally:
-        plt.close(fig)
-    atomic_write_text(out_dir / "lot.json", text)
-    atomic_write_text(out_dir / "lot.csv", csv_text)
-    with atomic_path(out_dir / "lot.png") as tmp:
-        tmp.write_bytes(buf.getvalue())
-    return [out_dir / "lot.json", out_dir / "lot.csv", out_dir / "lot.png"]
+    texts = {"lot.json": json.dumps(result.to_dict(), indent=1), "lot.csv": lot_csv(result)}
+    return write_files(out_dir, texts, {"lot.png": result.plot()})

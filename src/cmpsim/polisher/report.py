@@ -84,30 +84,34 @@ def _figures(result) -> dict:
     return figs
 
 
-def write_outputs(result, out_dir) -> list:
-    """Write the files of :data:`FILES` into ``out_dir``; returns their paths."""
-    out_dir = Path(out_dir)
-    text = json.dumps(result.to_dict(), indent=1)
-    csv_text = thickness_csv(result)
-    figs = _figures(result)
+def write_files(out_dir, texts: dict, figures: dict) -> list:
+    """Write ``texts`` ({name: str}) and ``figures`` ({name: matplotlib figure}, as PNG) into
+    ``out_dir``, each file atomically and every figure rendered before the first write (an error
+    while rendering leaves nothing); closes the figures. Returns the paths."""
     import matplotlib.pyplot as plt
 
+    out_dir = Path(out_dir)
     images = {}
     try:
-        for name, fig in figs.items():
+        for name, fig in figures.items():
             buf = _io.BytesIO()
             fig.savefig(buf, format="png", dpi=110, bbox_inches="tight")
             images[name] = buf.getvalue()
     finally:
-        for fig in figs.values():
+        for fig in figures.values():
             plt.close(fig)
     written = []
-    atomic_write_text(out_dir / "polish.json", text)
-    written.append(out_dir / "polish.json")
-    atomic_write_text(out_dir / "thickness.csv", csv_text)
-    written.append(out_dir / "thickness.csv")
+    for name, text in texts.items():
+        atomic_write_text(out_dir / name, text)
+        written.append(out_dir / name)
     for name, data in images.items():
         with atomic_path(out_dir / name) as tmp:
             tmp.write_bytes(data)
         written.append(out_dir / name)
     return written
+
+
+def write_outputs(result, out_dir) -> list:
+    """Write the files of :data:`FILES` into ``out_dir``; returns their paths."""
+    texts = {"polish.json": json.dumps(result.to_dict(), indent=1), "thickness.csv": thickness_csv(result)}
+    return write_files(out_dir, texts, _figures(result))
