@@ -7,9 +7,13 @@ within-wafer non-uniformity times the mean:
 
     minimise  sum_i a_i (RR_i(P) - m)^2     over P (and the level m),   P_lo <= P_k <= P_hi,
 
-optionally keeping the mean pressure (the load) or the mean rate of the start, and optionally
+optionally keeping the zones' mean pressure (the load) or the mean rate of the start, and optionally
 tuning the retaining ring's pressure with the zones (``ring=True``: the edge band is the ring's to
-shape, not a zone's; the ring presses the pad beside the wafer). Given an incoming
+shape, not a zone's; the ring presses the pad beside the wafer). With the ring tuned the mean rate
+(inside the edge exclusion) is kept by default: a fab tunes the profile at its rate, and flatness
+alone lowers the load (on the grooved 300mm preset fourfold); ``keep="none"`` asks for that
+explicitly. The kept rate is an equality of each linear step (one more least-squares row weighted
+:data:`KEEP_WEIGHT`) and a solved trial that leaves it by more than :data:`RATE_TOLERANCE` is refused. Given an incoming
 thickness profile t_in(r) and a polish time T, the flattened quantity is instead the remaining
 thickness t_in(r) - RR(r) T (:func:`read_incoming` reads the profile from a CSV file). Each step is a
 Gauss-Newton step on the zone response J_ik = d RR_i / d P_k, measured by finite differences of
