@@ -139,33 +139,69 @@ def test_without_the_slurrys_hydrodynamic_stiffness_the_preset_zones_steer_their
 
 @pytest.fixture(scope="module")
 def tuned():
-    """``cmpsim tune-zones --preset 300mm --ring``: the zones and the retaining ring tuned together (issue 32)."""
+    """``cmpsim tune-zones --preset 300mm --ring``: the zones and the retaining ring tuned together at the kept
+    mean removal rate, the default with the ring (issue 32)."""
     import cmpsim
 
     return cmpsim.tune_zones(Config.preset("300mm"), ring=True)
 
 
-# Measured (docs/model.md 13g): 0.785 % -> 0.195 % in 48 solves, ring at its 1.5 psi bound, zones about 0.7 psi,
-# mean rate 323 -> 77 nm/min (without --keep the tuner lowers the load: flat is all it was asked for)
-TUNED_NONUNIFORMITY = 0.00195
+# Measured (docs/model.md 13f, "Tuning the 300mm preset"): 0.785 % -> 0.3457 % in 24 solves at the kept rate
+# (321.71 -> 321.71 nm/min inside the edge exclusion), zones 2.995/2.996/2.988/2.989/3.187 psi, ring 2.968 psi
+# (inside its 1.5-9 psi bounds). Converged: 12 steps at rtol 1e-6 end at 0.3457 % too, the bounded least-squares
+# optimum of the last linearisation with the rate as an equality is 0.3453 %, and keeping the load instead gives
+# 0.3458 %. The residual lies outside 139 mm (93 % of the variance; 67 % in 145-147 mm, the inner flank of the fast
+# rim), where no zone's response bends fast enough and the ring's response inside 147 mm is weak (<= 6 nm/min/psi).
+TUNED_NONUNIFORMITY = 0.003457
+#: Without a kept rate (``keep="none"``, flatness alone) the tuner lowers the load fourfold to get 0.195 %.
+UNKEPT_NONUNIFORMITY = 0.00195
 
 
 @pytest.mark.slow
-def test_tune_zones_with_the_ring_on_the_grooved_300mm_preset_flattens_below_a_third_and_below_1_percent_and_reproduces(tuned):
-    """Issue 32's criterion, measured (docs/model.md 13g). Without the ring (issue 25's tuning) the grooved preset
-    ends at 0.317 %, above a third of 0.785 %; with it, below. A cold solve at the returned zone and ring
-    pressures gives the reported non-uniformity back to 1e-6."""
+def test_tune_zones_with_the_ring_keeps_the_rate_flattens_and_reproduces(tuned):
+    """At the kept rate the ring tuning more than halves the non-uniformity (0.785 % -> 0.346 %), keeps the mean
+    removal rate to 0.1 %, keeps the ring inside its bounds; a cold solve at the returned pressures gives the
+    reported non-uniformity back to 1e-6."""
     import cmpsim
+    from cmpsim.head.tuning import RATE_TOLERANCE
 
     before = tuned.before["within_wafer_nonuniformity"]
     assert before == pytest.approx(NONUNIFORMITY_3MM, abs=5e-5)
-    assert tuned.within_wafer_nonuniformity < before / 3.0 and tuned.within_wafer_nonuniformity < 0.01
+    assert tuned.keep == "rate"
+    assert tuned.mean_rate == pytest.approx(tuned.before["mean_rate"], rel=RATE_TOLERANCE)
+    assert tuned.within_wafer_nonuniformity <= before and tuned.within_wafer_nonuniformity < 0.01  # below 1 %: met
     assert tuned.within_wafer_nonuniformity == pytest.approx(TUNED_NONUNIFORMITY, abs=1e-4)
     assert tuned.before["ring_pressure"] == pytest.approx(3 * PSI)
     assert 1.5 * PSI <= tuned.ring_pressure <= 9 * PSI and tuned.config.retaining_ring_pressure == tuned.ring_pressure
+    assert all(0.5 * PSI <= p <= 8 * PSI for p in tuned.zone_pressures)
     again = cmpsim.solve(tuned.config, relative=False)
     assert again.scalars["within_wafer_nonuniformity"] == pytest.approx(tuned.within_wafer_nonuniformity, abs=1e-6, rel=0)
     assert again.config.zone_pressure_values == pytest.approx(tuned.zone_pressures, rel=1e-12)
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="measured: at the kept rate the zones and the ring reach 0.346 % (converged; keeping the load: 0.346 %), "
+    "above a third of 0.785 % (0.262 %); the residual is the 139-147 mm band, the inner flank of the fast rim, which "
+    "no zone response bends fast enough to follow and the ring barely reaches inside the 3 mm edge exclusion "
+    "(docs/model.md 13f). Below 1 % it is.",
+)
+def test_issue_32_criterion_at_the_kept_rate_below_a_third_and_below_1_percent(tuned):
+    before = tuned.before["within_wafer_nonuniformity"]
+    assert tuned.within_wafer_nonuniformity < 0.01
+    assert tuned.within_wafer_nonuniformity < before / 3.0
+
+
+@pytest.mark.slow
+def test_flatness_alone_reaches_a_third_only_by_quartering_the_rate():
+    """``keep="none"`` (``--keep none``), kept available, not the path that claims the criterion: 0.195 % at a
+    mean rate of 77 against 322 nm/min (every zone lowered to about 0.7 psi, the ring to its 1.5 psi bound)."""
+    import cmpsim
+
+    free = cmpsim.tune_zones(Config.preset("300mm"), ring=True, keep="none")
+    assert free.within_wafer_nonuniformity == pytest.approx(UNKEPT_NONUNIFORMITY, abs=1e-4)
+    assert free.mean_rate < 0.3 * free.before["mean_rate"]
 
 
 @pytest.mark.slow

@@ -226,3 +226,46 @@ def test_the_command_frees_the_ring_with_ring_and_its_bounds_with_ring_bounds(mo
     assert r.exit_code == 2 and "--ring-bounds needs --ring" in r.output
     r = CliRunner().invoke(main, base + ["--ring", "--ring-bounds", "2 psi"])
     assert r.exit_code == 2 and "--ring-bounds takes two pressures" in r.output
+
+
+# ---- the kept rate: with the ring, the tuning keeps the mean removal rate by default (issue 32) ----
+def test_tuning_the_ring_keeps_the_mean_rate_by_default_and_keep_none_lets_it_fall_only_when_asked():
+    """One trust-region step on the 3-inch layered head: the default with the ring is keep="rate" (a fab tunes
+    the profile at its rate). The mean removal rate inside the edge exclusion stays the start's to
+    RATE_TOLERANCE (0.1 %), the non-uniformity is not worse, and the ring stays inside its bounds."""
+    from cmpsim.head.tuning import RATE_TOLERANCE
+
+    cfg = Config.default().replace(**RINGED)
+    tuned = cmpsim.tune_zones(cfg, ring=True, max_steps=1)
+    assert tuned.keep == "rate" and tuned.to_dict()["keep"] == "rate"
+    assert tuned.mean_rate == pytest.approx(tuned.before["mean_rate"], rel=RATE_TOLERANCE)
+    assert tuned.within_wafer_nonuniformity <= tuned.before["within_wafer_nonuniformity"]
+    assert 1.5 * PSI <= tuned.ring_pressure <= 9 * PSI
+    data = tuned.to_dict()
+    assert data["mean_rate"] == tuned.mean_rate and data["before"]["mean_rate"] == tuned.before["mean_rate"]
+    assert data["units"]["mean_rate"] == "m/s" and data["units"]["wafer_mean_rate"] == "m/s"
+    # the zones alone keep their former default (nothing kept), and "none" is that default spelt out
+    assert cmpsim.tune_zones(Config.default().replace(**COARSE), max_steps=0).keep == "none"
+    assert cmpsim.tune_zones(cfg, ring=True, keep="none", max_steps=0).keep == "none"
+    with pytest.raises(ValueError, match=r"keep must be one of \('none', 'pressure', 'rate'\)"):
+        cmpsim.tune_zones(cfg, keep="load")
+
+
+def test_the_command_prints_the_mean_rate_before_and_after_in_nm_per_min(monkeypatch):
+    """The table output of ``tune-zones --ring`` (one step, to stay quick) states the kept mean rate, with units."""
+    import functools
+
+    import cmpsim.head.tuning
+
+    monkeypatch.setattr(cmpsim.head.tuning, "tune_zones", functools.partial(cmpsim.head.tuning.tune_zones, max_steps=1))
+    args = ["tune-zones", "--ring", "--grid", "coarse", "--set", "carrier=membrane", "--set", "zone_radii=20,38.1 mm", "--set", "pad_compliance=layer", "--set", "retaining_ring_pressure=4 psi"]
+    r = CliRunner().invoke(main, args)
+    assert r.exit_code == 0, r.output
+    text = " ".join(r.output.split())  # rich wraps the line at the terminal's width
+    line = re.search(r"mean removal rate inside the edge exclusion \(kept\): ([\d.]+) nm/min -> ([\d.]+) nm/min", text)
+    assert line, r.output
+    assert float(line.group(2)) == pytest.approx(float(line.group(1)), rel=1e-3)
+    assert re.search(r"over the whole wafer [\d.]+ nm/min -> [\d.]+ nm/min", text)
+    r = CliRunner().invoke(main, args + ["--keep", "none", "--json"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.output)["keep"] == "none"

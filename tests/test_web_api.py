@@ -522,6 +522,28 @@ def test_tune_zones_answers_the_object_of_the_command(client):
     assert bad.status_code == 422 and "tune_zones needs carrier = 'membrane'" in bad.text
 
 
+
+def test_tune_zones_with_the_ring_answers_the_object_of_tune_zones_ring(client, monkeypatch):
+    """``?ring=true`` is ``cmpsim tune-zones --ring`` (one step each, to stay quick): the same call, the ring
+    pressure and the kept mean rate in the answer; ``ring_bounds`` without ``ring`` is refused like the option."""
+    import functools
+
+    import cmpsim.head.tuning
+
+    monkeypatch.setattr(cmpsim.head.tuning, "tune_zones", functools.partial(cmpsim.head.tuning.tune_zones, max_steps=1))
+    body = {"carrier": "membrane", "zone_radii": "20,38.1 mm", "grid": "8x24", "pad_compliance": "layer", "retaining_ring_pressure": "4 psi"}
+    r = client.post("/api/tune-zones?ring=true", json=body)
+    assert r.status_code == 200, r.text
+    data = r.json()
+    args = ["tune-zones", "--json", "--ring"] + [a for k, v in body.items() for a in (("--grid", v) if k == "grid" else ("--set", f"{k}={v}"))]
+    cli = json.loads(CliRunner().invoke(main, args).output)
+    assert data["ring_pressure"] == pytest.approx(cli["ring_pressure"], rel=1e-9)
+    assert data["zone_pressures"] == pytest.approx(cli["zone_pressures"], rel=1e-9)
+    assert data["keep"] == "rate" and data["mean_rate"] == pytest.approx(data["before"]["mean_rate"], rel=1e-3)
+    bad = client.post("/api/tune-zones?ring_bounds=1,5%20psi", json=body)
+    assert bad.status_code == 422 and "ring_bounds needs ring" in bad.text
+
+
 # ---------------------------------------------------------------------------- the die on an uploaded layout
 
 

@@ -238,6 +238,30 @@ def test_tune_zones_fills_the_zone_pressures_and_flattens_the_profile(page, serv
     assert page.is_hidden("#message")
 
 
+def test_tune_zones_with_the_ring_tunes_the_ring_at_the_kept_rate_like_the_command(page, server):
+    """The page's "with the ring" is ``cmpsim tune-zones --ring`` (issue 32): the same numbers, the ring as one
+    more row, the mean removal rate before and after (kept), and the tuned ring pressure written into its input."""
+    _membrane(page, server)
+    page.select_option('#inputs [name="pad_compliance"]', "layer")
+    page.fill('#inputs [name="retaining_ring_pressure"]', "4")
+    page.check("#tune-ring")
+    page.click("#tune-zones")
+    page.wait_for_selector("#tune-profile .main-svg")
+    cfg = Config.default().replace(grid="coarse", carrier="membrane", zone_radii="20,38.1 mm", pad_compliance="layer", retaining_ring_pressure="4 psi")
+    expected = cmpsim.tune_zones(cfg, ring=True)
+    assert expected.keep == "rate"
+    after = float(page.get_attribute("#tune-summary", "data-after"))
+    assert after == pytest.approx(expected.within_wafer_nonuniformity, rel=1e-9)
+    rate_before = float(page.get_attribute("#tune-summary", "data-rate-before"))
+    rate_after = float(page.get_attribute("#tune-summary", "data-rate-after"))
+    assert rate_after == pytest.approx(rate_before, rel=1e-3) and "(kept)" in page.text_content("#tune-summary")
+    rows = page.eval_on_selector_all("#tune-table tbody tr", "rows => rows.map(r => [...r.cells].map(c => c.textContent))")
+    assert [r[0] for r in rows] == ["1", "2", "ring"]
+    assert float(rows[2][4]) == pytest.approx(expected.ring_pressure, rel=1e-5)
+    psi = 6894.757293168361
+    assert float(page.input_value('#inputs [name="retaining_ring_pressure"]')) == pytest.approx(expected.ring_pressure / psi, rel=1e-5)
+
+
 def test_a_failed_tuning_shows_the_apis_message(page, server):
     _membrane(page, server)
     page.fill('#inputs [name="zone_pressures"]', "3,5,6")  # three pressures for two zones

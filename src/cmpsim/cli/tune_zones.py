@@ -11,12 +11,18 @@ from .inputs import config_options, load_config
 @main.command(name="tune-zones")
 @config_options
 @click.option("--bounds", default="0.5,8 psi", show_default=True, metavar="LOW,HIGH UNIT", help="Bounds of every zone pressure.")
-@click.option("--keep", type=click.Choice(["pressure", "rate"]), default=None, help="Also keep the mean pressure (the load) or the mean removal rate of the start.")
+@click.option(
+    "--keep",
+    type=click.Choice(["none", "pressure", "rate"]),
+    default=None,
+    help="Also keep the zones' mean pressure (the load) or the mean removal rate of the start (inside the edge exclusion), "
+    "or nothing ('none': flatness alone, the rate may fall). [default: rate with --ring, none without]",
+)
 @click.option("--incoming", "incoming", type=click.Path(dir_okay=False), default=None, metavar="FILE.csv", help="Incoming thickness profile to flatten after --polish-time: CSV with header radius_<unit>,thickness_<unit> (e.g. radius_mm,thickness_nm).")
 @click.option("--polish-time", "polish_time", default=None, metavar="TIME", help="Polish time with units (e.g. '60 s', '1.5 min'); required with --incoming.")
 @click.option("--ring", "ring", is_flag=True, help="Also tune the retaining ring's pressure (retaining_ring_pressure is the start; the layered pad): the edge band is the ring's to shape, not a zone's.")
 @click.option("--ring-bounds", "ring_bounds", default=None, metavar="LOW,HIGH UNIT", help="Bounds of the ring pressure with --ring [default: 1.5,9 psi].")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before; with --ring also ring_pressure (Pa); with --incoming also remaining_thickness (radius, thickness; m) and remaining_nonuniformity (fraction).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): zone_pressures (Pa), within_wafer_nonuniformity (fraction), profile (radius, rate), before; mean_rate and wafer_mean_rate (m/s), keep; with --ring also ring_pressure (Pa); with --incoming also remaining_thickness (radius, thickness; m) and remaining_nonuniformity (fraction).")
 def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, incoming, polish_time, ring, ring_bounds, as_json):
     """Find the zone pressures of a membrane head that flatten the removal profile.
 
@@ -24,31 +30,21 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
     needs --set carrier=membrane and zone_radii. Prints the pressures, the profile before
     and after, and the within-wafer non-uniformity. With --incoming FILE.csv and
     --polish-time, flattens the thickness left after polishing instead. With --ring, the
-    retaining ring's pressure is tuned with the zones.
+    retaining ring's pressure is tuned with the zones, keeping the mean removal rate unless
+    --keep says otherwise (--keep none lets the rate fall).
     """
     import json
 
     from ..solver.equilibrium import EquilibriumError
-    from ..head.tuning import tune_zones
-    from ..inputs.units import parse_list
+    from ..head.tuning import CLI_NAMES, tune_zones_from_text
 
     try:
         cfg = load_config(config_path, assignments, preset, grid)
-        limits = parse_list(bounds, "Pa", "--bounds", example="psi")
-        if len(limits) != 2:
-            raise ValueError(f"--bounds takes two pressures, LOW,HIGH with one unit (e.g. '0.5,8 psi'); got {bounds!r}")
         if incoming is not None and polish_time is None:
             raise ValueError("--incoming needs --polish-time (e.g. --polish-time '60 s')")
         if polish_time is not None and incoming is None:
             raise ValueError("--polish-time needs --incoming FILE.csv (the incoming thickness profile)")
-        ring_limits = None
-        if ring_bounds is not None:
-            if not ring:
-                raise ValueError("--ring-bounds needs --ring (the retaining ring's pressure tuned with the zones)")
-            ring_limits = parse_list(ring_bounds, "Pa", "--ring-bounds", example="psi")
-            if len(ring_limits) != 2:
-                raise ValueError(f"--ring-bounds takes two pressures, LOW,HIGH with one unit (e.g. '1.5,9 psi'); got {ring_bounds!r}")
-        result = tune_zones(cfg, bounds=limits, keep=keep, incoming=incoming, polish_time=polish_time, ring=ring, ring_bounds=ring_limits)
+        result = tune_zones_from_text(cfg, bounds, keep=keep, ring=ring, ring_bounds=ring_bounds, names=CLI_NAMES, incoming=incoming, polish_time=polish_time)
     except EquilibriumError as exc:
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
@@ -83,6 +79,11 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
             f"remaining-thickness non-uniformity: {100 * result.before['remaining_nonuniformity']:.3f} % -> "
             f"{100 * result.remaining_nonuniformity:.3f} %"
         )
+    console.print(
+        f"mean removal rate inside the edge exclusion ({'kept' if result.keep == 'rate' else 'not kept'}): "
+        f"{nm_min * result.before['mean_rate']:.2f} nm/min -> {nm_min * result.mean_rate:.2f} nm/min; "
+        f"over the whole wafer {nm_min * result.before['wafer_mean_rate']:.2f} nm/min -> {nm_min * result.wafer_mean_rate:.2f} nm/min"
+    )
     console.print(
         f"within-wafer non-uniformity: {100 * result.before['within_wafer_nonuniformity']:.3f} % -> "
         f"{100 * result.within_wafer_nonuniformity:.3f} % ({result.solves} operating points solved)"

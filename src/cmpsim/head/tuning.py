@@ -7,9 +7,13 @@ within-wafer non-uniformity times the mean:
 
     minimise  sum_i a_i (RR_i(P) - m)^2     over P (and the level m),   P_lo <= P_k <= P_hi,
 
-optionally keeping the mean pressure (the load) or the mean rate of the start, and optionally
+optionally keeping the zones' mean pressure (the load) or the mean rate of the start, and optionally
 tuning the retaining ring's pressure with the zones (``ring=True``: the edge band is the ring's to
-shape, not a zone's; the ring presses the pad beside the wafer). Given an incoming
+shape, not a zone's; the ring presses the pad beside the wafer). With the ring tuned the mean rate
+(inside the edge exclusion) is kept by default: a fab tunes the profile at its rate, and flatness
+alone lowers the load (on the grooved 300mm preset fourfold); ``keep="none"`` asks for that
+explicitly. The kept rate is an equality of each linear step (one more least-squares row weighted
+:data:`KEEP_WEIGHT`) and a solved trial that leaves it by more than :data:`RATE_TOLERANCE` is refused. Given an incoming
 thickness profile t_in(r) and a polish time T, the flattened quantity is instead the remaining
 thickness t_in(r) - RR(r) T (:func:`read_incoming` reads the profile from a CSV file). Each step is a
 Gauss-Newton step on the zone response J_ik = d RR_i / d P_k, measured by finite differences of
@@ -42,7 +46,7 @@ from ..results.uniformity import ring_areas_inside, weighted_std_over_mean
 from ..inputs.units import to_si
 from .zone_response import RESPONSE_STEP, ZoneSolver, boundary_widths, inside_share, profile_of, response_matrix, ring_response
 
-__all__ = ["ZoneTuning", "tune_zones", "read_incoming", "DEFAULT_BOUNDS", "DEFAULT_RING_BOUNDS", "KEEP", "LENGTH_UNITS"]
+__all__ = ["ZoneTuning", "tune_zones", "tune_zones_from_text", "read_incoming", "DEFAULT_BOUNDS", "DEFAULT_RING_BOUNDS", "KEEP", "LENGTH_UNITS", "RATE_TOLERANCE"]
 
 PSI = 6894.757293168361
 #: Default bounds of the zone pressures, Pa (0.5-8 psi, issue 25).
@@ -54,8 +58,17 @@ DEFAULT_RING_BOUNDS = (1.5 * PSI, 9.0 * PSI)
 TRUST_START = 0.25
 #: Shrinks of the trust region in a step whose trial does not flatten the profile, before the tuning stops.
 MAX_SHRINKS = 4
-#: What a tuning may keep fixed besides flattening.
-KEEP = (None, "pressure", "rate")
+#: What a tuning may keep fixed besides flattening: nothing ("none": the load and the rate may fall),
+#: the zones' mean pressure (the load) or the mean removal rate. ``keep=None`` is the default: "rate"
+#: with the ring tuned (a fab tunes the profile at its rate), "none" without (issue 25's tuning).
+KEEP = ("none", "pressure", "rate")
+#: Weight of the kept-rate or kept-load row of the least-squares step against the profile's rows
+#: (both relative): an equality constraint of the linearised step to about 1e-6 of the mean.
+KEEP_WEIGHT = 1e3
+#: The kept mean removal rate (``keep="rate"``) is held to this fraction of the start's: a Gauss-Newton
+#: step keeps the linearised mean exactly, the solved one moves by the step's second-order change;
+#: a trial step whose solved mean moves further is refused like one that does not flatten.
+RATE_TOLERANCE = 1e-3
 #: Units a column of an incoming-thickness CSV may name in its header (``radius_mm``), in m.
 LENGTH_UNITS = {"m": 1.0, "mm": 1e-3, "um": 1e-6, "nm": 1e-9, "angstrom": 1e-10}
 
@@ -135,7 +148,10 @@ class ZoneTuning:
     non-uniformity then. With the ring tuned (``ring=True``): ``ring_pressure`` the tuned ring
     pressure (Pa; ``before["ring_pressure"]`` the start's) and ``ring_response`` the last response
     of the profile to it, d RR_i / d P_ring (m/s/Pa); both None otherwise, and ``config`` carries
-    the tuned ring pressure.
+    the tuned ring pressure. ``keep`` is what the tuning kept ("none", "pressure" or "rate");
+    ``mean_rate`` the area mean of the tuned removal profile inside the edge exclusion (the mean the
+    non-uniformity divides by, and the one ``keep="rate"`` keeps) and ``wafer_mean_rate`` its area
+    mean over the whole wafer (m/s; ``before`` holds both of the start).
     """
 
     zone_radii: tuple
@@ -153,6 +169,9 @@ class ZoneTuning:
     remaining_nonuniformity: float | None = None
     ring_pressure: float | None = None
     ring_response: np.ndarray | None = None
+    keep: str = "none"
+    mean_rate: float | None = None  # area mean of the tuned profile inside the edge exclusion, m/s
+    wafer_mean_rate: float | None = None  # area mean of the tuned profile over the whole wafer, m/s
 
     @property
     def response_inside(self) -> tuple:
@@ -180,9 +199,13 @@ class ZoneTuning:
             },
             "zone_response_inside": list(self.response_inside),
             "zone_response_width": [b.to_dict() for b in self.response_widths],
-            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1", "zone_response_width": "m"},
+            "units": {"zone_radii": "m", "zone_pressures": "Pa", "within_wafer_nonuniformity": "1", "radius": "m", "rate": "m/s", "zone_response_inside": "1", "zone_response_width": "m", "mean_rate": "m/s", "wafer_mean_rate": "m/s"},
             "solves": self.solves,
+            "keep": self.keep,
+            "mean_rate": self.mean_rate,
+            "wafer_mean_rate": self.wafer_mean_rate,
         }
+        out["before"].update(mean_rate=self.before.get("mean_rate"), wafer_mean_rate=self.before.get("wafer_mean_rate"))
         if self.remaining_thickness is not None:
             out["polish_time"] = self.polish_time
             out["remaining_thickness"] = {k: list(map(float, v)) for k, v in self.remaining_thickness.items()}
@@ -256,8 +279,12 @@ def tune_zones(
         every zone) are the start.
     bounds : (low, high)
         Bounds of every zone pressure, Pa or text with units (default 0.5-8 psi).
-    keep : None, "pressure" or "rate"
-        Also keep the mean pressure (the load) or the mean removal rate of the start.
+    keep : None, "none", "pressure" or "rate"
+        Also keep the zones' mean pressure (the load) or the mean removal rate of the start (the area
+        mean inside the edge exclusion, the mean the non-uniformity divides by; held to
+        :data:`RATE_TOLERANCE` of the start's), or nothing ("none": flatness alone, the load may fall
+        and the rate with it). None, the default: "rate" with ``ring=True`` (a fab tunes the profile at
+        its rate, and flatness alone lowers it), "none" without (the zone tuning of issue 25).
     max_steps : int
         Gauss-Newton steps at most (each costs one solve per zone and one of the step).
     rtol : float
@@ -293,8 +320,10 @@ def tune_zones(
     """
     if not models.carrier(config).has_zones:
         raise ValueError(f"tune_zones needs carrier = 'membrane' (zone pressures to tune); got carrier = {config.carrier!r}")
+    if keep is None:
+        keep = "rate" if ring else "none"
     if keep not in KEEP:
-        raise ValueError(f"keep must be one of {KEEP}; got {keep!r}")
+        raise ValueError(f"keep must be one of {KEEP} (or None: 'rate' with the ring tuned, 'none' without); got {keep!r}")
     lo, hi = (to_si(b, "Pa", "bounds", example="psi") for b in bounds)
     if not (0 < lo < hi):
         raise ValueError(f"bounds must be 0 < low < high (Pa); got ({lo:g}, {hi:g}) Pa")
@@ -356,6 +385,11 @@ def tune_zones(
 
     target = float(np.sum(weights * quantity(base)) / weights.sum())  # the start's mean of q
 
+    def mean_rate_of(result) -> float:  # area mean of the removal rate inside the edge exclusion, m/s
+        return float(np.sum(weights * profile_of(result)["rate"]) / weights.sum())
+
+    rate_target = mean_rate_of(base)
+
     def nonuniformity_of(values) -> float:
         return weighted_std_over_mean(values, weights)
 
@@ -384,10 +418,17 @@ def tune_zones(
         if keep == "pressure":  # sum A_k dP_k = 0 over the zones (the ring's load is not the wafer's), weighted to dominate
             load_row = np.zeros(start_x.size + 1)
             load_row[:n] = areas / areas.sum()
-            rows.append(1e3 * load_row[None, :] / PSI)
+            rows.append(KEEP_WEIGHT * load_row[None, :] / PSI)
             rhs.append([0.0])
-        elif keep == "rate":  # the level m is the start's mean of q (of the rate, or t_in - rate T)
+        elif keep == "rate":
+            # the level m is the start's mean of q (of the rate, or t_in - rate T), and the linearised
+            # profile's own mean is held there too (an equality, weighted to dominate): fixing the
+            # level alone only penalised the mean's drift as part of the variance about m
             lower[-1], upper[-1] = target - 1e-12 * abs(target), target + 1e-12 * abs(target)
+            mean_row = np.zeros(start_x.size + 1)
+            mean_row[:-1] = (weights / weights.sum()) @ (scale * response) / abs(target)
+            rows.append(KEEP_WEIGHT * mean_row[None, :])
+            rhs.append([KEEP_WEIGHT * (target - float(np.sum(weights * q) / weights.sum())) / abs(target)])
         A_all, b_all = np.vstack(rows), np.concatenate(rhs)
         accepted = False
         for _shrink in range(MAX_SHRINKS + 1):
@@ -404,6 +445,8 @@ def tune_zones(
                 delta = 0.5 * np.max(np.abs(trial - x))
                 continue
             value = nonuniformity(result)
+            if keep == "rate" and abs(mean_rate_of(result) - rate_target) > RATE_TOLERANCE * abs(rate_target):
+                value = np.inf  # the solved mean left the kept rate: a step too far for the linearisation
             if value < wiwnu:
                 accepted = True
                 break
@@ -429,7 +472,9 @@ def tune_zones(
         tuned["retaining_ring_pressure"] = float(x[n])
     final_cfg = config.replace(**tuned)
     before = {"zone_pressures": tuple(start), "within_wafer_nonuniformity": weighted_std_over_mean(profile_of(base)["rate"], weights), "profile": profile_of(base)}
-    extra = {}
+    area = np.diff(np.asarray(base.grid.ring_faces, dtype=float) ** 2)  # ring areas / pi: the whole wafer's weights
+    before.update(mean_rate=rate_target, wafer_mean_rate=float(np.sum(area * profile_of(base)["rate"]) / area.sum()))
+    extra = dict(keep=keep, mean_rate=mean_rate_of(current), wafer_mean_rate=float(np.sum(area * profile_of(current)["rate"]) / area.sum()))
     if ring:
         before["ring_pressure"] = ring_start
         extra.update(ring_pressure=float(x[n]), ring_response=response[:, n])
@@ -454,3 +499,33 @@ def tune_zones(
         **extra,
     )
 
+
+
+#: How the command line spells the options :func:`tune_zones_from_text` names in its messages.
+CLI_NAMES = {"bounds": "--bounds", "ring": "--ring", "ring_bounds": "--ring-bounds"}
+
+
+def tune_zones_from_text(config: Config, bounds: str = "0.5,8 psi", keep: str | None = None, ring: bool = False, ring_bounds: str | None = None, names=None, **options) -> ZoneTuning:
+    """:func:`tune_zones` with its bounds as text, ``LOW,HIGH UNIT`` (e.g. ``"0.5,8 psi"``): the one call of
+    ``cmpsim tune-zones`` and of ``POST /api/tune-zones``, so the two parse and check the same way.
+
+    ``names`` maps ``"bounds"``, ``"ring"`` and ``"ring_bounds"`` to the caller's spelling of them in
+    messages (:data:`CLI_NAMES` on the command line; the API's query names by default). ``options``
+    go to :func:`tune_zones` as they are (``incoming``, ``polish_time``, ``max_steps``, ...).
+    Raises ``ValueError`` for bounds that are not two pressures, ``ring_bounds`` without ``ring``,
+    and whatever :func:`tune_zones` refuses.
+    """
+    from ..inputs.units import parse_list
+
+    name = {"bounds": "bounds", "ring": "ring", "ring_bounds": "ring_bounds", **(names or {})}
+    limits = parse_list(bounds, "Pa", name["bounds"], example="psi")
+    if len(limits) != 2:
+        raise ValueError(f"{name['bounds']} takes two pressures, LOW,HIGH with one unit (e.g. '0.5,8 psi'); got {bounds!r}")
+    ring_limits = None
+    if ring_bounds is not None:
+        if not ring:
+            raise ValueError(f"{name['ring_bounds']} needs {name['ring']} (the retaining ring's pressure tuned with the zones)")
+        ring_limits = parse_list(ring_bounds, "Pa", name["ring_bounds"], example="psi")
+        if len(ring_limits) != 2:
+            raise ValueError(f"{name['ring_bounds']} takes two pressures, LOW,HIGH with one unit (e.g. '1.5,9 psi'); got {ring_bounds!r}")
+    return tune_zones(config, bounds=limits, keep=keep, ring=ring, ring_bounds=ring_limits, **options)

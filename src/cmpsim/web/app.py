@@ -207,26 +207,26 @@ def create_app(limits: Limits | None = None, token: str | None = None, workers: 
             "The body is a JSON object of inputs, as for /api/solve, of a membrane head (`carrier`: "
             "`membrane`, `zone_radii`, optionally `zone_pressures` as the start). The answer is the object "
             "`cmpsim tune-zones --json` prints: `zone_pressures` (Pa), `within_wafer_nonuniformity` (fraction), "
-            "`profile` (`radius`, `rate`), `before`. 422: bad input or no equilibrium. 429: every job slot taken."
+            "`profile` (`radius`, `rate`), `mean_rate` (m/s), `before`; with `ring=true` also `ring_pressure` (Pa). "
+            "The same call as the command line (`cmpsim.head.tuning.tune_zones_from_text`). "
+            "422: bad input or no equilibrium. 429: every job slot taken."
         ),
     )
     def tune_zones_route(
         payload: dict[str, Any] | None = Body(None),
         bounds: str = Query("0.5,8 psi", description="bounds of every zone pressure: LOW,HIGH and one unit"),
-        keep: Literal["pressure", "rate"] | None = Query(None, description="also keep the mean pressure or the mean rate"),
+        keep: Literal["none", "pressure", "rate"] | None = Query(None, description="also keep the zones' mean pressure or the mean rate, or nothing; default: rate with ring, none without"),
+        ring: bool = Query(False, description="also tune the retaining ring's pressure (retaining_ring_pressure is the start; the layered pad)"),
+        ring_bounds: str | None = Query(None, description="bounds of the ring pressure with ring=true: LOW,HIGH and one unit (default 1.5,9 psi)"),
     ):
         from ..solver.equilibrium import EquilibriumError
-        from ..head.tuning import tune_zones
-        from ..inputs.units import parse_list
+        from ..head.tuning import tune_zones_from_text
 
         cfg = config_from_request(payload)
         limits.check_grid(cfg.numerics.grid)
         with slots:
             try:
-                limits_pa = parse_list(bounds, "Pa", "bounds", example="psi")
-                if len(limits_pa) != 2:
-                    raise ValueError(f"bounds takes two pressures, LOW,HIGH with one unit (e.g. '0.5,8 psi'); got {bounds!r}")
-                return JSONResponse(tune_zones(cfg, bounds=limits_pa, keep=keep).to_dict())
+                return JSONResponse(tune_zones_from_text(cfg, bounds, keep=keep, ring=ring, ring_bounds=ring_bounds).to_dict())
             except EquilibriumError as exc:
                 raise InputError(f"no equilibrium: {exc}") from None
             except ValueError as exc:

@@ -1,6 +1,8 @@
 // Zone tuning of a membrane head: POST /api/tune-zones with the form's inputs, then the tuned
 // zone pressures (psi and Pa), the non-uniformity before and after, the profile before and after
 // (with the zone boundaries), and the tuned pressures written into the zone_pressures input.
+// "with the ring" also tunes the retaining ring's pressure (POST /api/tune-zones?ring=true, the call
+// of `cmpsim tune-zones --ring`, which keeps the mean removal rate) and writes it into its input.
 
 import { state, $, showMessage, beginAction, showActionError } from "./page.js";
 import { api, errorText } from "./http.js";
@@ -13,6 +15,7 @@ const PSI = 6894.757293168361; // Pa per psi (pint's psi)
 export function syncTuneButton() {
   const carrier = document.querySelector('#inputs [name="carrier"]');
   $("tune-zones").disabled = !carrier || carrier.value !== "membrane";
+  $("tune-ring").disabled = $("tune-zones").disabled;
 }
 
 const psiText = (pa) => String(Number((pa / PSI).toPrecision(6)));
@@ -27,7 +30,8 @@ function setInput(name, text) {
 export async function tuneZones() {
   const body = collectInputs();
   const t0 = beginAction("tune-zones", "Tuning zones\u2026");
-  const r = await api("POST", "/api/tune-zones", body);
+  const ring = $("tune-ring").checked;
+  const r = await api("POST", "/api/tune-zones" + (ring ? "?ring=true" : ""), body);
   syncTuneButton();
   if (!r.ok) {
     showActionError(r, errorText(r), "Tune zones: ");
@@ -42,6 +46,10 @@ export async function tuneZones() {
   if (appliedReset) setInput("applied_pressure", applied.default_display);
   const unit = state.byName.zone_pressures.display_unit;
   setInput("zone_pressures", d.zone_pressures.map(psiText).join(", ") + (unit === "psi" ? "" : " psi"));
+  if (d.ring_pressure !== undefined) {
+    const ringUnit = state.byName.retaining_ring_pressure.display_unit;
+    setInput("retaining_ring_pressure", psiText(d.ring_pressure) + (ringUnit === "psi" ? "" : " psi"));
+  }
   renderTune(d, appliedReset);
   try {
     await ensurePlotly();
@@ -55,22 +63,33 @@ export async function tuneZones() {
 function renderTune(d, appliedReset) {
   $("tune").hidden = false;
   const before = d.before.within_wafer_nonuniformity, after = d.within_wafer_nonuniformity;
-  $("tune-summary").textContent = `Within-wafer non-uniformity ${percent(before)} before, ${percent(after)} after tuning.`
-    + " The tuned pressures are in the zone_pressures input" + (appliedReset ? " (applied_pressure set back to its default: the zones now set the load)." : ".");
+  const rate = (v) => `${(v * 6e10).toFixed(2)} nm/min`;
+  const kept = d.keep === "rate" ? "kept" : "not kept";
+  $("tune-summary").textContent = `Within-wafer non-uniformity ${percent(before)} before, ${percent(after)} after tuning;`
+    + ` mean removal rate inside the edge exclusion (${kept}) ${rate(d.before.mean_rate)} before, ${rate(d.mean_rate)} after.`
+    + " The tuned pressures are in the zone_pressures input" + (d.ring_pressure !== undefined ? " and the ring's in retaining_ring_pressure" : "")
+    + (appliedReset ? " (applied_pressure set back to its default: the zones now set the load)." : ".");
   $("tune-summary").dataset.before = before;
   $("tune-summary").dataset.after = after;
+  $("tune-summary").dataset.rateBefore = d.before.mean_rate;
+  $("tune-summary").dataset.rateAfter = d.mean_rate;
   const tbody = document.querySelector("#tune-table tbody");
   tbody.textContent = "";
-  d.zone_pressures.forEach((p, k) => {
+  const row = (cells) => {
     const tr = document.createElement("tr");
-    const cells = [`${k + 1}`, String(Number((d.zone_radii[k] * 1e3).toPrecision(5))), psiText(d.before.zone_pressures[k]), psiText(p), String(Number(p.toPrecision(6)))];
     for (const c of cells) {
       const td = document.createElement("td");
       td.textContent = c;
       tr.append(td);
     }
     tbody.append(tr);
+  };
+  d.zone_pressures.forEach((p, k) => {
+    row([`${k + 1}`, String(Number((d.zone_radii[k] * 1e3).toPrecision(5))), psiText(d.before.zone_pressures[k]), psiText(p), String(Number(p.toPrecision(6)))]);
   });
+  if (d.ring_pressure !== undefined) {
+    row(["ring", "beside the wafer", psiText(d.before.ring_pressure), psiText(d.ring_pressure), String(Number(d.ring_pressure.toPrecision(6)))]);
+  }
 }
 
 function plotTune(d) {
