@@ -10,8 +10,9 @@ docs/polisher.md; calibrated to Jeong et al. 2024, compared with Lawing 2004); w
 ``worn_summits`` the worn summit std enters each step's wafer solve as well.
 
 Before the lot, ``qualification`` monitor wafers (1 by default) run the recipe as written on the
-same pad, at the nominal incoming thickness: a fab measures a blanket monitor's removal rate when a
-lot starts on a tool (Boning et al. 1999), and that measurement seeds the EWMA's rate estimate. The
+same pad, at the nominal incoming thickness: a fab commonly measures a blanket monitor's removal
+rate when a lot starts on a tool (practice, not sourced here), and that measurement seeds the
+EWMA's rate estimate. The
 pad they polished (warmed, worn, conditioned) is the pad the lot starts on. With ``qualification =
 0`` the lot starts on the fresh pad and the controller is seeded by the model's prediction for it.
 
