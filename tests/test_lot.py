@@ -1,8 +1,9 @@
 """A lot of wafers on one pad (cmpsim lot, issue 32): the pad glazes without conditioning, holds
 with it, and the EWMA controller holds the final thickness where an uncontrolled lot drifts.
 
-The 300mm preset (grooved) on the coarse grid, 25 wafers of the issue's oxide recipe, seed 1:
-three lots computed once for the module (about 20 s each on 2 cores)."""
+The 300mm preset (grooved) on the coarse grid, 25 wafers of the issue's oxide recipe, seed 1, one
+monitor wafer before each lot (the default qualification): three lots computed once for the module
+(about 15-20 s each on 2 cores). The fresh-pad lot (qualification = 0) is in tests/test_pad_in_recipe.py."""
 
 import json
 from importlib import resources
@@ -42,7 +43,6 @@ def test_without_conditioning_the_pad_glazes_and_the_rate_falls_by_at_least_5_pe
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="measured: the fresh pad's first wafer polishes 3.4 % faster than the conditioned steady state the pad reaches during it (0.9664 of wafer 1's rate from wafer 2 on, flat to 1e-5); the issue asks within 2 % of the lot (docs/polisher.md)")
 def test_with_in_situ_conditioning_the_rate_stays_within_2_percent(lots):
     rates = _rates(lots[("in_situ", "none")])
     assert np.max(np.abs(rates / rates[0] - 1.0)) <= 0.02, rates / rates[0]
@@ -50,9 +50,10 @@ def test_with_in_situ_conditioning_the_rate_stays_within_2_percent(lots):
 
 @pytest.mark.slow
 def test_with_in_situ_conditioning_the_pad_holds_a_steady_state_after_its_first_wafer(lots):
-    """What the model gives (the criterion above fails on the first wafer): wear and renewal balance."""
+    """Wear and renewal balance: after the monitor wafer (qualification) the pad is in its in-situ
+    balance, and the lot's rate is flat (measured 0.04 % from wafer 1 to 2, then to 1e-6)."""
     rates = _rates(lots[("in_situ", "none")])[1:]
-    assert np.max(np.abs(rates / rates[0] - 1.0)) <= 2e-3, rates / rates[0]  # measured 0.14 %
+    assert np.max(np.abs(rates / rates[0] - 1.0)) <= 2e-3, rates / rates[0]
     assert np.all(np.abs(np.diff(rates)[1:]) <= np.abs(np.diff(rates)[:-1]) + 1e-24)  # settling
 
 
@@ -64,7 +65,6 @@ def test_without_control_the_final_thickness_drifts_by_at_least_3_percent(lots):
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="measured: wafer 5 ends 1.24 % above target (the EWMA, lambda = 0.3, still closing on the 3.4 % rate drop of the fresh pad's first wafer: 3.5, 2.5, 1.6, 1.2 % on wafers 2-5); wafers 6-25 within 0.84 % (docs/polisher.md)")
 def test_with_ewma_control_the_final_thickness_stays_within_1_percent_of_target_on_wafers_5_to_25(lots):
     lot = lots[("in_situ", "ewma")]
     deviation = np.abs(_finals(lot) / lot.target - 1.0)[4:]
@@ -72,13 +72,13 @@ def test_with_ewma_control_the_final_thickness_stays_within_1_percent_of_target_
 
 
 @pytest.mark.slow
-def test_the_ewma_error_decays_geometrically_after_the_pads_break_in(lots):
-    """What the model gives: the controlled lot's deviation from the target shrinks wafer after wafer
-    (about 1 - lambda per wafer while the rate error dominates) and stays below 1 % from wafer 6."""
+def test_the_ewma_error_decays_wafer_after_wafer(lots):
+    """The controlled lot's deviation from the target shrinks wafer after wafer while the rate error
+    dominates (the monitor wafer's rate and the lot's differ by the zone feedback's changes; measured
+    0.94, 0.79, 0.59, 0.39, 0.27 % on wafers 1-5)."""
     lot = lots[("in_situ", "ewma")]
     deviation = np.abs(_finals(lot) / lot.target - 1.0)
-    assert np.max(deviation[5:]) <= 0.01, deviation
-    assert np.all(np.diff(deviation[1:6]) < 0), deviation[:6]
+    assert np.all(np.diff(deviation[:6]) < 0), deviation[:6]
 
 
 @pytest.mark.slow

@@ -14,10 +14,12 @@ from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
 @click.option("--control", type=click.Choice(["none", "ewma"]), default="none", show_default=True, help="Run-to-run control: the EWMA controller sets each wafer's polish time (feed-forward) and zone pressures (feedback).")
 @click.option("--seed", type=int, default=None, help="Seed of the incoming thickness draw (2 % spread of the mean, 1 % tilt, 1 sigma): the same seed, the same lot.")
 @click.option("--idle-time", "idle_time", default="30 s", show_default=True, metavar="TIME", help="Time between two wafers (the pad cools; ex-situ conditioning works then).")
+@click.option("--qualification", type=click.IntRange(min=0), default=1, show_default=True, help="Monitor wafers polished with the recipe as written on the pad before the lot: the last one's measured rate seeds the EWMA and the lot starts on the pad they leave (0: a fresh pad, the EWMA seeded by the model).")
+@click.option("--worn-summits", "worn_summits", is_flag=True, help="The worn pad's summit-height std enters every step's wafer solve (docs/polisher.md: below about 2 um the solver finds no equilibrium).")
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input for every step unless the step sets it (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): wafers [{index, polish_time (s), removal_rate_mean (m/s), final_thickness_mean (m), final_thickness_nonuniformity (fraction), zone_pressures (Pa), ...}], target, units.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, metavar="DIR", help="Write lot.json, lot.csv and the lot plot lot.png into DIR.")
-def lot_command(recipe, wafers, conditioning, control, seed, idle_time, assignments, as_json, out_dir):
+def lot_command(recipe, wafers, conditioning, control, seed, idle_time, qualification, worn_summits, assignments, as_json, out_dir):
     """Polish a lot of wafers of RECIPE.toml in sequence on one pad that warms, glazes and is conditioned.
 
     Each wafer's incoming thickness varies (reproducible with --seed); with --control ewma the
@@ -33,7 +35,8 @@ def lot_command(recipe, wafers, conditioning, control, seed, idle_time, assignme
         parsed = read_recipe(recipe)
         overrides = parse_assignments(assignments)
         idle = to_si(idle_time, "s", "--idle-time", example="s")
-        result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle)
+        result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle,
+                         qualification=qualification, worn_summits=worn_summits)
     except EquilibriumError as exc:
         _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
@@ -53,6 +56,9 @@ def lot_command(recipe, wafers, conditioning, control, seed, idle_time, assignme
     console = Console()
     console.print(_rich_table(f"lot of {len(rows)} wafers ({parsed.source}): control {control}, conditioning {conditioning}",
                               ["wafer", "polish time (s)", "mean rate (nm/min)", "final mean (nm)", "non-uniformity (%)", "rate factor", "zone pressures (psi)"], rows))
+    if result.qualification is not None:
+        q = result.qualification
+        console.print(f"qualification: {q['wafers']} monitor wafer(s) before the lot, last at {q['removal_rate_mean'] * 6e10:.1f} nm/min over {q['polish_time']:.1f} s")
     if result.target is not None:
         console.print(f"target {result.target * 1e9:.1f} nm")
     console.print(f"{result.solves} wafer equilibria solved in {result.wall_time:.1f} s")

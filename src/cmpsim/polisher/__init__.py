@@ -10,6 +10,7 @@ an ``until = "endpoint"`` step, the friction torque on the platen), ``engine`` (
 integration: one wafer solve per distinct step inputs, every film's removal rate from it, the
 pad's temperature from :mod:`cmpsim.physics.thermal` driven by the frictional power and setting
 the Arrhenius chemical step; :func:`cmpsim.polisher.engine.polish`, ``cmpsim.polish``),
+``pad`` (the pad's life through a recipe's time steps: glazing, conditioning, the worn summits),
 ``report`` (the JSON, CSV and plots of ``cmpsim polish --out DIR``), ``control`` (the EWMA
 run-to-run controller) and ``incoming`` (a lot's incoming profiles).
 

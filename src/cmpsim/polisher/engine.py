@@ -25,9 +25,14 @@ For each step (``docs/polisher.md``, "Recipes"):
    the reflectance signal (:mod:`cmpsim.polisher.endpoint`) is compared with the level of the top
    film cleared; the step ends at the first sample within tolerance, at ``max_time`` at the latest.
 
+5. **The pad's life** (``pad_life=``, :class:`cmpsim.polisher.pad.PadLife`): the summit caps wear
+   (and in situ are renewed by the disk) at every time step; the rate of a time step is scaled by
+   the glazed pad's rate factor at mid-step; with ``PadLife(worn_summits=True)`` the worn summit std
+   enters each step's solve (:mod:`cmpsim.polisher.pad`). Without ``pad_life`` the pad does not wear.
+
 A lot runs :func:`polish` wafer after wafer with :class:`PadState` carried in and out (``pad_state=``,
 ``PolishResult.pad_state``; :func:`idle` cools the pad between wafers); ``rate_factor`` scales every
-removal rate (a pad-life model's glazing factor, :func:`cmpsim.physics.padlife.rate_factor`).
+removal rate besides (1 by default).
 """
 
 from __future__ import annotations
@@ -44,7 +49,9 @@ from ..physics.thermal import PadThermalState, ThermalColumn, polisher_column
 from ..results.uniformity import ring_mean
 from ..solver.model import solve
 from ..solver.postprocess import removal_law_fields, stress_fields
+from ..physics.padlife import PadLifeState
 from .endpoint import EndpointDetector, EndpointTrace, cleared_level, platen_torque, reflectance_signal
+from .pad import PadLife, worn_overrides
 from .recipe import Recipe, RecipeError, Step, load_recipe
 from .stack import FilmStack, remove
 
@@ -62,8 +69,8 @@ PLATEN = "sink"
 class PadState:
     """The pad carried from step to step and wafer to wafer: ``thermal`` (the temperatures of the pad
     column, :class:`cmpsim.physics.thermal.PadThermalState`, K; None = at the slurry temperature),
-    ``life`` (a pad-life state, :class:`cmpsim.physics.padlife.PadLifeState`, carried unchanged here:
-    a lot advances it) and ``time`` (s the pad has polished or idled since it was new)."""
+    ``life`` (a pad-life state, :class:`cmpsim.physics.padlife.PadLifeState`; advanced by
+    :func:`polish` with ``pad_life``, carried unchanged without it) and ``time`` (s the pad has polished or idled since it was new)."""
 
     thermal: PadThermalState | None = None
     life: object = None
@@ -138,7 +145,9 @@ class StepResult:
     start), ``value`` (K)}, ``thickness`` {``radius`` (m), film name: (m) after the step}; besides them
     the end-point ``signals`` trace, the ``endpoint`` outcome, the ``top_film`` and its ``cleared_fraction``
     (of the wafer area) after the step, ``frictional_power`` (W/m^2), ``platen_torque`` (N m),
-    ``removed_volume`` (m^3), ``removal_rate_profile`` {radius, material: m/s at the step's start}."""
+    ``removed_volume`` (m^3), ``removal_rate_profile`` {radius, material: m/s at the step's start} and, with a
+    pad life, ``glazing`` {``time`` (s from the recipe's start), ``rate_factor`` (1), ``summit_sigma`` (1,
+    worn over fresh, at the step's start, as the step's solve takes it)}."""
 
     name: str
     duration: float
@@ -155,6 +164,7 @@ class StepResult:
     removal_rate_profile: dict
     endpoint: dict | None = None
     limit: float = 0.0
+    glazing: dict | None = None
 
     def to_dict(self) -> dict:
         return {
@@ -173,6 +183,7 @@ class StepResult:
             "removed_volume": self.removed_volume,
             "removal_rate_profile": self.removal_rate_profile,
             "limit": self.limit,
+            "glazing": self.glazing,
         }
 
 
@@ -183,6 +194,8 @@ UNITS = {
     "frictional_power": "W/m^2 (wafer mean)", "platen_torque": "N m", "removed_volume": "m^3", "removal_rate_profile": "m/s",
     "limit": "s (time, or max_time)", "endpoint.time": "s (from the step's start)", "target.remaining": "m", "wall_time": "s",
     "pad_state.surface_temperature": "K", "pad_state.time": "s", "films.thickness": "m",
+    "glazing.time": "s (from the recipe's start)", "glazing.rate_factor": "1 (glazed pad / fresh pad)",
+    "glazing.summit_sigma": "1 (worn / fresh summit-height std)",
 }
 
 
@@ -260,7 +273,7 @@ def idle(pad_state: PadState, seconds: float, config: Config) -> PadState:
 
 
 def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None = None, time_step: float = TIME_STEP,
-           rate_factor: float = 1.0, incoming=None) -> PolishResult:
+           rate_factor: float = 1.0, incoming=None, pad_life: PadLife | None = None) -> PolishResult:
     """Polish a recipe through time (``cmpsim polish``).
 
     Parameters
@@ -278,6 +291,9 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
     incoming : (radius, thickness of each film) optional
         Incoming thickness per film, m, on given radii (m): ``(radius, [t_film1, t_film2, ...])``,
         interpolated onto the rings; default the recipe's uniform films.
+    pad_life : PadLife, optional
+        The pad wears and is conditioned through the steps (``pad_state.life`` carries it in and out);
+        default: no wear.
 
     Returns
     -------
@@ -305,7 +321,12 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
     initial = None
     clock = 0.0
     results = []
-    for step, cfg in zip(recipe.steps, configs):
+    for step, step_cfg in zip(recipe.steps, configs):
+        life, cfg = None, step_cfg
+        if pad_life is not None:  # the worn summits may enter the step's solve (the fresh pad is the step's own)
+            life = pad.life if isinstance(pad.life, PadLifeState) else PadLifeState()
+            worn = worn_overrides(step_cfg, life, pad_life.pad_for(step_cfg)) if pad_life.worn_summits else {}
+            cfg = step_cfg.replace(**worn) if worn else step_cfg
         key = _config_key(cfg)
         if key not in solves:
             solves[key] = StepSolve(cfg)
@@ -319,8 +340,9 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         thermal = pad.thermal if pad.thermal is not None else column.initial_state()
         if thermal.temperature.shape[-1] != column.size:
             raise RecipeError(f"{recipe.source}: {step.label}: the pad state carried in does not fit this pad's thermal column")
-        result, stack, thermal, clock = _run_step(recipe, step, sol, column, stack, thermal, clock, time_step, rate_factor)
-        pad = PadState(thermal, pad.life, pad.time + result.duration)
+        result, stack, thermal, clock, life = _run_step(recipe, step, sol, column, stack, thermal, clock, time_step, rate_factor,
+                                                        pad_life, life, step_cfg)
+        pad = PadState(thermal, life if pad_life is not None else pad.life, pad.time + result.duration)
         results.append(result)
     return PolishResult(recipe, results, initial, stack, pad, len(solves), _time.perf_counter() - t0, float(time_step))
 
@@ -343,7 +365,8 @@ def _initial_stack(recipe: Recipe, sol: StepSolve, incoming) -> FilmStack:
 
 
 def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn, stack: FilmStack, thermal: PadThermalState,
-              clock: float, time_step: float, rate_factor: float):
+              clock: float, time_step: float, rate_factor: float, pad_life: PadLife | None = None, life: PadLifeState | None = None,
+              life_config: Config | None = None):
     n_films = len(stack.names)
     tops = stack.top()
     k0 = int(tops.min())  # the step's top film: the highest film left anywhere
@@ -361,9 +384,15 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
             raise RecipeError(f"{recipe.source}: {step.label}: {exc}") from None
     q = sol.frictional_power
     start_temperature = float(thermal.surface)
+    glazing = None
+    start_factor = rate_factor
+    if pad_life is not None:
+        glazed = pad_life.factor(life, life_config)
+        start_factor = rate_factor * glazed
+        glazing = {"time": [clock], "rate_factor": [glazed], "summit_sigma": pad_life.summit_sigma(life, life_config)}
     profile = {"radius": [float(x) for x in sol.radius]}
     for m in dict.fromkeys(stack.materials):
-        profile[m] = [float(x) for x in rate_factor * sol.rate_profile(m, start_temperature)]
+        profile[m] = [float(x) for x in start_factor * sol.rate_profile(m, start_temperature)]
     times, temps = [clock], [start_temperature]
     signals = EndpointTrace()
     top_name = stack.names[k0] if k0 < n_films else None
@@ -378,7 +407,13 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
         dt = min(time_step, limit - elapsed)
         mid = float(column.advance(thermal, q, 0.5 * dt).surface)
         thermal = column.advance(thermal, q, dt)
-        rates = np.array([sol.rate_profile(m, mid) for m in stack.materials]) * rate_factor
+        factor = rate_factor
+        if pad_life is not None:  # the glazing of the time step at mid-step (second order in dt)
+            factor = rate_factor * pad_life.factor(pad_life.advance(life, life_config, 0.5 * dt), life_config)
+            life = pad_life.advance(life, life_config, dt)
+            glazing["time"].append(clock + dt)
+            glazing["rate_factor"].append(pad_life.factor(life, life_config))
+        rates = np.array([sol.rate_profile(m, mid) for m in stack.materials]) * factor
         stack, removal = remove(stack, rates, dt)
         volume += removal.volume(stack.areas)
         elapsed += dt
@@ -403,6 +438,6 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
         removal_rate_mean=volume / (stack.wafer_area * duration) if duration > 0 else 0.0,
         pad_temperature={"time": times, "value": temps}, thickness=stack.to_dict(), signals=signals, top_film=top_name,
         cleared_fraction=cleared(stack), frictional_power=q, platen_torque=sol.torque, removed_volume=volume,
-        removal_rate_profile=profile, endpoint=endpoint, limit=limit,
+        removal_rate_profile=profile, endpoint=endpoint, limit=limit, glazing=glazing,
     )
-    return result, stack, thermal, clock
+    return result, stack, thermal, clock, life

@@ -4,9 +4,17 @@ Each wafer is polished by :func:`cmpsim.polisher.engine.polish` with the pad car
 last one: its temperature (the wafer cools it between wafers, :func:`~cmpsim.polisher.engine.idle`)
 and its life (the summit caps worn flat while polishing and cut back by the conditioning disk,
 :mod:`cmpsim.physics.padlife`: ``conditioning`` "none", "ex_situ" between wafers, or "in_situ"
-during the polish). The glazing enters the removal rate through the pad-life kernel's glazed-area
-factor (eq. L4 of docs/polisher.md; calibrated to Jeong et al. 2024, compared with Lawing 2004);
-the summit constants of the worn pad are reported per wafer.
+during the polish), advanced by the recipe engine at every time step (:mod:`cmpsim.polisher.pad`).
+The glazing enters the removal rate through the pad-life kernel's glazed-area factor (eq. L4 of
+docs/polisher.md; calibrated to Jeong et al. 2024, compared with Lawing 2004); with
+``worn_summits`` the worn summit std enters each step's wafer solve as well.
+
+Before the lot, ``qualification`` monitor wafers (1 by default) run the recipe as written on the
+same pad, at the nominal incoming thickness: a fab commonly measures a blanket monitor's removal
+rate when a lot starts on a tool (practice, not sourced here), and that measurement seeds the
+EWMA's rate estimate. The
+pad they polished (warmed, worn, conditioned) is the pad the lot starts on. With ``qualification =
+0`` the lot starts on the fresh pad and the controller is seeded by the model's prediction for it.
 
 The incoming thickness of the top film varies from wafer to wafer
 (:func:`cmpsim.polisher.incoming.incoming_profiles`, reproducible with ``seed``), or is given.
@@ -26,10 +34,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..results.uniformity import weighted_std_over_mean
-from ..physics.padlife import CONDITIONING, ConditionerDisk, FreshPad, PadLifeState, advance_pad_life, condition_ex_situ, summit_constants
+from ..physics.padlife import CONDITIONING, ConditionerDisk, FreshPad, PadLifeState, condition_ex_situ
 from .control import ControllerState, EWMAController, feed_forward_time, update_rate, zone_correction
 from .engine import PadState, idle, polish
 from .incoming import incoming_profiles
+from .pad import PadLife
 from .recipe import RecipeError, load_recipe
 
 __all__ = ["CONTROL", "WaferRecord", "LotResult", "run_lot", "lot_csv", "write_lot"]
@@ -40,7 +49,8 @@ CONTROL = ("none", "ewma")
 UNITS = {
     "polish_time": "s", "removal_rate_mean": "m/s", "final_thickness_mean": "m", "final_thickness_nonuniformity": "1 (std over mean, wafer area)",
     "zone_pressures": "Pa", "incoming_mean": "m", "pad_temperature_end": "K", "rate_factor": "1 (glazed pad / fresh pad)",
-    "summit_sigma": "1 (worn / fresh)", "target": "m", "idle_time": "s", "wall_time": "s",
+    "summit_sigma": "1 (worn / fresh, at the wafer's start)", "target": "m", "idle_time": "s", "wall_time": "s",
+    "qualification.removal_rate_mean": "m/s", "qualification.polish_time": "s",
 }
 
 
@@ -92,6 +102,7 @@ class LotResult:
     idle_time: float
     solves: int
     wall_time: float
+    qualification: dict | None = None
 
     def to_dict(self) -> dict:
         """The JSON object of ``cmpsim lot --json`` (SI, units in ``units``)."""
@@ -103,6 +114,7 @@ class LotResult:
             "target": self.target,
             "idle_time": self.idle_time,
             "wafers": [w.to_dict() for w in self.wafers],
+            "qualification": self.qualification,
             "solves": self.solves,
             "wall_time": self.wall_time,
             "units": dict(UNITS),
@@ -168,6 +180,8 @@ def run_lot(
     weight: float = 0.3,
     zone_weight: float = 0.5,
     time_step: float = 1.0,
+    qualification: int = 1,
+    worn_summits: bool = False,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -197,6 +211,12 @@ def run_lot(
         The EWMA weights of the rate and of the profile.
     time_step : float
         The recipes' time step, s.
+    qualification : int
+        Monitor wafers polished with the recipe as written (nominal incoming films) on the lot's pad
+        before the lot, >= 0: the last one's measured mean rate seeds the EWMA, and the lot starts on
+        the pad they leave. 0: the lot starts on a fresh pad, the EWMA seeded by the model's rate for it.
+    worn_summits : bool
+        The worn pad's summit std enters every step's wafer solve (:class:`cmpsim.polisher.pad.PadLife`).
     """
     t0 = _time.perf_counter()
     recipe = load_recipe(recipe)
@@ -208,6 +228,8 @@ def run_lot(
         raise ValueError(f"control must be one of {CONTROL}; got {control!r}")
     if not (math.isfinite(idle_time) and idle_time >= 0):
         raise ValueError(f"idle_time must be >= 0 s; got {idle_time!r}")
+    if not (isinstance(qualification, (int, np.integer)) and qualification >= 0):
+        raise ValueError(f"qualification must be a whole number of monitor wafers >= 0; got {qualification!r}")
     target = recipe.target.remaining
     if control == "ewma" and target is None:
         raise RecipeError(f"{recipe.source}: control 'ewma' needs the recipe's [target] remaining thickness")
@@ -215,9 +237,32 @@ def run_lot(
     step_k = _controlled_step(recipe) if control == "ewma" else None
     base = recipe.step_config(recipe.steps[step_k if step_k is not None else 0], overrides)
 
-    # the wafer's radii and the nominal rate: one solve of the (first) controlled step, shared by the controller
-    first = polish(recipe, overrides=overrides, time_step=time_step)
-    solves = first.solves
+    life_model = PadLife(conditioning, disk, pad, worn_summits)
+
+    def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
+        life = result.pad_state.life
+        if conditioning == "ex_situ":
+            life = condition_ex_situ(life, idle_time, disk)
+        cooled = idle(result.pad_state, idle_time, base)
+        return PadState(cooled.thermal, life, cooled.time)
+
+    # the wafer's radii and the controller's first rate: the monitor wafers on the lot's pad (or the
+    # model's rate on a fresh pad), polished with the recipe as written at the nominal films
+    pad_state = PadState(life=PadLifeState())
+    qualified = None
+    if qualification:
+        solves = 0
+        for _ in range(qualification):
+            first = polish(recipe, overrides=overrides, time_step=time_step, pad_state=pad_state, pad_life=life_model)
+            solves += first.solves
+            pad_state = between_wafers(first)
+    else:
+        first = polish(recipe, overrides=overrides, time_step=time_step)
+        solves = first.solves
+    first_time = sum(s.duration for s in first.steps)
+    first_removed = first.initial.mean_thickness(0) - first.final.mean_thickness(0)
+    if qualification:
+        qualified = {"wafers": int(qualification), "polish_time": float(first_time), "removal_rate_mean": float(first_removed / first_time) if first_time > 0 else 0.0}
     radius = np.asarray(first.initial.radius, dtype=float)
     weights = np.asarray(first.initial.areas, dtype=float) / float(np.sum(first.initial.areas))  # the wafer-area mean of the stack
     top = recipe.films[0]
@@ -240,9 +285,7 @@ def run_lot(
     controller = None
     if control == "ewma":
         controller = EWMAController(target=float(target), weight=weight, zone_weight=zone_weight)
-        removed0 = first.initial.mean_thickness(0) - first.final.mean_thickness(0)
-        polish_time0 = sum(s.duration for s in first.steps)
-        state = ControllerState(rate=removed0 / polish_time0, zone_pressures=start_pressures)
+        state = ControllerState(rate=first_removed / first_time, zone_pressures=start_pressures)
         if zoned:
             from ..head.zone_response import ZoneSolver, profile_of, response_matrix
 
@@ -252,8 +295,7 @@ def run_lot(
             response = response_matrix(run, start_pressures, profile_of(r0)["rate"])
             solves += run.solves
 
-    sliding_speed = base.rotation_speed * base.centre_distance  # the pad's speed under the wafer centre, m/s
-    life, pad_state, records = PadLifeState(), PadState(), []
+    records = []
     for k in range(wafers):
         inc = profiles[k]
         inc_mean = float(np.sum(weights * inc))
@@ -265,9 +307,8 @@ def run_lot(
             wafer_recipe = replace(recipe, steps=tuple(steps))
             if zoned:
                 ov["zone_pressures"] = state.zone_pressures
-        summits = summit_constants(life, pad)
-        factor = float(np.asarray(summits.rate_factor))
-        result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, rate_factor=factor, incoming=(radius, [inc, *others]), time_step=time_step)
+        result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
+                        pad_life=life_model)
         solves += result.solves
         total_time = sum(s.duration for s in result.steps)
         final = np.asarray(result.final.thickness[0], dtype=float)
@@ -283,23 +324,28 @@ def run_lot(
                 zone_pressures=tuple(float(p) for p in pressures),
                 incoming_mean=inc_mean,
                 pad_temperature_end=result.pad_state.surface_temperature,
-                rate_factor=factor,
-                summit_sigma=float(np.asarray(summits.sigma)),
+                rate_factor=_mean_factor(result),
+                summit_sigma=float(result.steps[0].glazing["summit_sigma"]),
                 radius=radius,
                 final_thickness=final,
             )
         )
-        # the pad: worn while polishing (conditioned in situ), then idle: cools, conditioned ex situ
-        life = advance_pad_life(life, base.applied_pressure, sliding_speed, total_time, conditioning, disk, pad)
-        if conditioning == "ex_situ":
-            life = condition_ex_situ(life, idle_time, disk)
-        pad_state = idle(result.pad_state, idle_time, base)
+        pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
         if controller is not None:
             controlled_time = wafer_recipe.steps[step_k].time
             state = update_rate(state, removed, total_time, controller.weight)
             if zoned:
                 state = zone_correction(controller, state, weights, final, response, controlled_time, zone_areas)
-    return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves, _time.perf_counter() - t0)
+    return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves,
+                     _time.perf_counter() - t0, qualified)
+
+
+def _mean_factor(result) -> float:
+    """The glazed pad's rate factor averaged over a wafer's polish time (trapezoid over the time steps), 1."""
+    t = np.concatenate([np.asarray(s.glazing["time"], dtype=float) for s in result.steps])
+    f = np.concatenate([np.asarray(s.glazing["rate_factor"], dtype=float) for s in result.steps])
+    span = t[-1] - t[0]
+    return float(np.trapezoid(f, t) / span) if span > 0 else float(f[0])
 
 
 def lot_csv(result: LotResult) -> str:

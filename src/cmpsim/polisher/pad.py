@@ -1,0 +1,111 @@
+"""The pad's life inside a recipe: glazing and conditioning as they enter each step (issue 32).
+
+:mod:`cmpsim.physics.padlife` holds the kernels (the worn volume W of the summit caps, eq. L2; the
+worn pad's summit constants, L3; the glazed-area rate factor, L4). This module joins them to a
+recipe's steps (``docs/polisher.md``, "Pad life in a recipe"):
+
+- **Within a step** the pad wears (and, ``in_situ``, is renewed by the disk) at every time step of
+  the recipe engine, at the step's applied pressure and the pad's speed under the wafer centre
+  (Omega_p d); the removal rate of a time step is scaled by the rate factor at mid-step. The glazing
+  of a wafer is thereby resolved in time: with in-situ conditioning the worn volume relaxes to its
+  balance W* = k_w P U / r_c with the time constant 1/r_c (20 s at the calibrated disk), well inside
+  a wafer, so a wafer's rate is not the rate of the pad it started on.
+- **At a step's start**, with ``worn_summits = True`` (not the default), the worn pad's
+  summit-height std enters the step's wafer solve: the contact model's ``pad_roughness`` becomes
+  sigma_s (worn) and the summits keep their radius and density (wear flattens summits, it does not
+  remove them: eq. L3), i.e. ``roughness_scaling = "fixed_summits"`` with the fresh pad's effective
+  radius and density. The worn height density (a normal density below the front plus the atom of
+  flattened summits) is then represented in the Greenwood-Williamson integrals and the flow
+  factors by a Gaussian of the worn std: a poor representation of flat plateaus, and one the
+  solver cannot balance below about 2 um on the 300mm preset (docs/polisher.md, "Pad life in a
+  recipe", for the measured effect and why it is not the default).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..inputs.config import Config
+from ..physics.padlife import (
+    CONDITIONING,
+    DEFAULT_DISK,
+    DEFAULT_PAD,
+    ConditionerDisk,
+    FreshPad,
+    PadLifeState,
+    advance_pad_life,
+    summit_constants,
+)
+
+__all__ = ["PadLife", "fresh_pad", "worn_overrides", "sliding_speed"]
+
+
+def fresh_pad(config: Config) -> FreshPad:
+    """The fresh pad of ``config``: its effective summit std (m), density (1/m^2) and radius (m) as
+    the solver sets them up (``roughness_scaling``), its ``contact_cutoff``, and the calibrated wear
+    coefficient k_w of :data:`cmpsim.physics.padlife.DEFAULT_PAD` (Jeong et al. 2024)."""
+    sigma = float(config.pad_roughness)
+    if config.roughness_scaling == "self_similar":
+        ratio = sigma / config.reference_roughness
+        radius, density = config.asperity_radius * ratio, config.asperity_density / ratio**2
+    else:
+        radius, density = config.asperity_radius, config.asperity_density
+    return replace(DEFAULT_PAD, sigma=sigma, density=float(density), radius=float(radius), cutoff=float(config.contact_cutoff))
+
+
+def sliding_speed(config: Config) -> float:
+    """The pad's speed under the wafer centre, Omega_p d (m/s): the sliding speed of the pad's wear."""
+    return float(config.rotation_speed * config.centre_distance)
+
+
+def worn_overrides(config: Config, state: PadLifeState, pad: FreshPad | None = None) -> dict:
+    """The inputs that put the worn pad of ``state`` into ``config``'s wafer solve (eq. L3): the worn
+    summit std as ``pad_roughness`` (m), the fresh pad's summit radius and density kept
+    (``roughness_scaling = "fixed_summits"``). Empty for a fresh pad (W = 0): the config is unchanged."""
+    if float(np.max(np.asarray(state.worn_volume, dtype=float))) == 0.0:
+        return {}
+    p = pad if pad is not None else fresh_pad(config)
+    ratio = float(np.asarray(summit_constants(state, p).sigma))
+    return {
+        "pad_roughness": p.sigma * ratio,
+        "asperity_radius": p.radius,
+        "asperity_density": p.density,
+        "roughness_scaling": "fixed_summits",
+    }
+
+
+@dataclass(frozen=True)
+class PadLife:
+    """How the pad's life runs through a recipe: ``conditioning`` "none" | "ex_situ" | "in_situ"
+    (the disk during polishing only in situ; between wafers a lot conditions ex situ), the
+    conditioning ``disk`` and the ``pad`` (None: the calibrated disk, and the fresh pad of each
+    step's config, :func:`fresh_pad`); ``worn_summits``: the worn summit std enters each step's
+    wafer solve (:func:`worn_overrides`; off by default)."""
+
+    conditioning: str = "in_situ"
+    disk: ConditionerDisk | None = None
+    pad: FreshPad | None = None
+    worn_summits: bool = False
+
+    def __post_init__(self) -> None:
+        if self.conditioning not in CONDITIONING:
+            raise ValueError(f"conditioning must be one of {CONDITIONING}; got {self.conditioning!r}")
+
+    def pad_for(self, config: Config) -> FreshPad:
+        """The fresh pad of a step: the given one, or the step's config's."""
+        return self.pad if self.pad is not None else fresh_pad(config)
+
+    def advance(self, state: PadLifeState, config: Config, dt: float) -> PadLifeState:
+        """The pad after ``dt`` s of polishing at ``config``'s applied pressure (Pa) and sliding speed (eq. L2)."""
+        return advance_pad_life(state, config.applied_pressure, sliding_speed(config), dt, self.conditioning,
+                                self.disk if self.disk is not None else DEFAULT_DISK, self.pad_for(config))
+
+    def factor(self, state: PadLifeState, config: Config) -> float:
+        """The glazed pad's rate factor RR/RR_fresh (eq. L4), dimensionless."""
+        return float(np.asarray(summit_constants(state, self.pad_for(config)).rate_factor))
+
+    def summit_sigma(self, state: PadLifeState, config: Config) -> float:
+        """The worn summit std over the fresh one (eq. L3), dimensionless."""
+        return float(np.asarray(summit_constants(state, self.pad_for(config)).sigma))
