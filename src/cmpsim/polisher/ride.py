@@ -106,7 +106,7 @@ class RidingDie:
                 raise ValueError(f"--die {str(self.layout)!r}: {exc}") from None
         given = [n for n, v in (("--layer", self.layers), ("--top", self.top), ("--pdk", self.pdk), ("--layer-map", self.layer_map)) if v]
         if given:
-            raise ValueError(f"{', '.join(given)} apply to a layout file (.gds, .gds.gz, .oas); --die {str(self.layout)!r} is a CSV grid or a built-in die")
+            raise ValueError(f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to a layout file (.gds, .gds.gz, .oas); --die {str(self.layout)!r} is a CSV grid or a built-in die")
         if str(self.layout) not in BUILTIN_LAYOUTS and not os.path.isfile(str(self.layout)):
             raise ValueError(f"--die {str(self.layout)!r}: no such file (a .gds, .gds.gz, .oas or CSV layout, or a built-in die: cmpsim die --list)")
         try:
