@@ -57,10 +57,10 @@ def _riding(chip, **kw):
     return RidingDie(str(chip), layers=("1/0",), window=20e-6, **kw)
 
 
-def _alone(chip, recipe, step, rate, time):
+def _alone(chip, recipe, step, rate, time, spec=None):
     """The die model alone at a step's config, a blanket rate and a time (``cmpsim die``'s DieModel)."""
     cfg = recipe.step_config(recipe.steps[step], COARSE)
-    return DieModel(cfg, PROCESS, blanket_rate=rate).run(layout_die(str(chip), ["1/0"], 20e-6), time)
+    return DieModel(cfg, PROCESS, blanket_rate=rate, spec=spec).run(layout_die(str(chip), ["1/0"], 20e-6), time)
 
 
 def _same_die(a, b, rtol=1e-9):
@@ -71,18 +71,19 @@ def _same_die(a, b, rtol=1e-9):
 
 def test_one_step_equals_the_die_model_alone_at_the_sites_rate_and_time(chip):
     text = _steps(("polish", 'time = "90 s"'))
-    res = polish(text, overrides=COARSE, die=_riding(chip, sites=(0.0, 0.1)))
+    res = polish(text, overrides=COARSE, die=_riding(chip, sites=(0.0, 0.1), spec={"dishing": "5 nm"}))
     step = res.steps[0]
     profile = step.removal_rate_profile
     for k, site in enumerate(step.die):
         rate = float(np.interp(site["radius"], profile["radius"], profile["copper"]))  # mechanical kinetics: the rate at the step's start
         assert site["blanket_rate"] == pytest.approx(rate, rel=1e-12)
         assert site["time"] == site["duration"] == 90.0
-        alone = _alone(chip, load_recipe(text), 0, rate, 90.0)
+        alone = _alone(chip, load_recipe(text), 0, rate, 90.0, spec={"dishing": "5 nm"})
         _same_die(res.ride.dies[k], alone)
         d = alone.to_dict()
         for key in ("thickness_range", "step_height_max", "dishing_max", "erosion_max"):
             assert site[key] == pytest.approx(d[key], rel=1e-9, abs=1e-15), key
+        assert site["hotspot_count"] == d["hotspot_count"] > 0  # counted as cmpsim die lists them
     assert step.die[0]["dishing_max"] > 1e-9  # the field copper cleared: the die dishes
     assert set(SITE_KEYS) <= set(step.die[0])
 

@@ -109,6 +109,7 @@ class DieModel:
             raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.blanket_rate = float(blanket_rate)
         self._eff: dict = {}
+        self._token = object()  # marks the dies whose conditions this model set (DieModel.resume)
 
     def run(self, layout, time: float | None = None, *, density=None, width=None, space=None, incoming=None,
             level: str | None = None) -> DieResult:
@@ -152,6 +153,7 @@ class DieModel:
 
         lay = _as_layout(layout)
         ev = DieEvolution(lay, self.process, self._effective(lay), self.blanket_rate, self.config.asperity_radius, self.feature, incoming)
+        ev.conditioned_by = self._token
         return self._result(lay, ev, self.blanket_rate, level)
 
     def resume(self, previous: DieResult, duration: float, *, blanket_rate: float | None = None) -> DieResult:
@@ -171,7 +173,11 @@ class DieModel:
         if previous.process != self.process:
             raise ValueError("resume: the die was started with another process (film stack) than this model's")
         ev = previous.evolution.copy()
-        ev.condition(rate, self._effective(lay), self.config.asperity_radius, self.feature)
+        if ev.conditioned_by is self._token:  # this model's pressure and weighting already: only the rate
+            ev.set_rate(rate)
+        else:
+            ev.condition(rate, self._effective(lay), self.config.asperity_radius, self.feature)
+            ev.conditioned_by = self._token
         ev.advance_to(ev.t + float(duration))
         return self._result(lay, ev, rate, previous.level)
 

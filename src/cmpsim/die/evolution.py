@@ -73,6 +73,7 @@ class DieEvolution:
             self.za = self.za + (1.0 - a) * step
             self.zb = self.zb - a * step
         self.condition(blanket_rate, effective_density, asperity_radius, feature)
+        self.conditioned_by = None  # what set the conditions (a DieModel's mark: cmpsim.die.chip.DieModel.resume)
         self.za0, self.zb0 = self.za.copy(), self.zb.copy()
         self.t = 0.0
         s0 = np.abs(self.za - self.zb)
@@ -88,14 +89,18 @@ class DieEvolution:
         The state (both levels of every cell, the event times, the time) is kept: a later step of a recipe, at
         another rate or pressure, continues the same die (:meth:`cmpsim.die.chip.DieModel.resume`).
         """
-        if not (np.isfinite(blanket_rate) and blanket_rate > 0):
-            raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
-        self.rate = float(blanket_rate)
+        self.set_rate(blanket_rate)
         eff = np.asarray(effective_density, dtype=float)
         self.f = np.clip(eff if self._eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
         self.h = contact_heights(self._gap, self.process.contact_height, asperity_radius)
         if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
             self.h = self.h + feature.bulge(self._gap, self._pitches(), self.f)
+
+    def set_rate(self, blanket_rate: float) -> None:
+        """Set the blanket rate (m/s) from now on, the rest of the conditions kept (:meth:`condition`)."""
+        if not (np.isfinite(blanket_rate) and blanket_rate > 0):
+            raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
+        self.rate = float(blanket_rate)
 
     def copy(self) -> "DieEvolution":
         """An independent copy of the state (advancing it leaves this one where it is)."""

@@ -32,7 +32,7 @@ import numpy as np
 
 __all__ = ["RidingDie", "Ride", "SITE_KEYS", "DIE_UNITS", "parse_sites"]
 
-#: The keys of a site in a step's ``die`` list (each from the die model's own JSON, :meth:`cmpsim.die.DieResult.to_dict`).
+#: The keys of a site in a step's ``die`` list besides radius and duration (the die model's own, :meth:`cmpsim.die.DieResult.scalars`).
 SITE_KEYS = ("time", "blanket_rate", "thickness_range", "step_height_max", "dishing_max", "erosion_max", "hotspot_count",
              "time_to_planarize", "time_to_clear")
 #: The units of the ride's keys in the JSON of ``cmpsim polish --die``.
@@ -190,15 +190,14 @@ class Ride:
         depth = np.interp(self.radii, np.asarray(ring_radius, dtype=float), result.blanket_removal[self.process.kind])
         duration = float(result.duration)
         if self.dies is None:
-            self.dies = [model.start(self.layout) for _ in self.radii]
+            self.dies = [model.start(self.layout)] * len(self.radii)  # one start for all: resume leaves it as it was
         out = []
         for k, (r, d) in enumerate(zip(self.radii, depth)):
             if duration > 0 and d > 0:
                 self.dies[k] = model.resume(self.dies[k], duration, blanket_rate=d / duration)
             elif duration > 0:
                 raise ValueError(f"step {result.name!r}: the {self.process.kind} rate at the site r = {r * 1e3:g} mm is zero: nothing polishes the die")
-            d_json = self.dies[k].to_dict()
-            out.append({"radius": float(r), "duration": duration} | {key: d_json[key] for key in SITE_KEYS}
+            out.append({"radius": float(r), "duration": duration} | self.dies[k].scalars()
                        | {"blanket_rate": d / duration if duration > 0 else 0.0})
         return out
 
