@@ -187,7 +187,6 @@ class DieResult:
         """The object of ``cmpsim die --json`` (SI units; null where a quantity does not apply or was not reached)."""
         from .hotspots import public
 
-        ev = self.evolution
         hot = self.hotspots() if self.spec else []
         out = {
             "layout": self.layout.name,
