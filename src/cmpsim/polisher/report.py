@@ -135,7 +135,7 @@ def site_folder(radius: float, k: int) -> str:
 def write_outputs(result, out_dir) -> list:
     """Write the files of :data:`FILES` into ``out_dir``; returns their paths. With a layout riding along also
     ``die.csv`` (the die per step and site) and per site the files of ``cmpsim die`` after the last step
-    (:func:`cmpsim.die.report.write_die_outputs`) in ``die_<k>_r<mm>mm/``."""
+    (``cmpsim.die.report.write_die_outputs``) in ``die_<k>_r<mm>mm/``."""
     texts = {"polish.json": json.dumps(result.to_dict(), indent=1), "thickness.csv": thickness_csv(result)}
     ride = result.ride
     if ride is not None:
