@@ -8,7 +8,12 @@ length derived from the pad stack (docs/model.md, section 18):
 * :func:`simulate_wafer`: every die of a wafer, each at the rotation-averaged rate at its site;
 * :class:`Layout`, :func:`read_layout`, :func:`builtin_layout`, :data:`BUILTIN_LAYOUTS`: layouts;
 * :func:`planarization_length_from_pad`, :func:`effective_density`: the pad's averaging;
-* :class:`DieProcess`: the film stack and the contact height.
+* :class:`DieProcess`: the film stack and the contact height;
+* :meth:`cmpsim.die.chip.DieModel.start`, :meth:`~cmpsim.die.chip.DieModel.resume`: a die continued from its
+  state at another rate or pressure (the steps of a recipe, :mod:`cmpsim.polisher.ride`).
+
+Lives on the studies floor. May import: the driver (:mod:`cmpsim.solver`) and every floor below it,
+:mod:`cmpsim.layout` (the layouts it reads) and the utilities; not :mod:`cmpsim.polisher`, which drives it.
 """
 
 from .density import GaussianWeighting, PadWeighting, effective_density

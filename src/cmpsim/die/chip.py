@@ -108,6 +108,8 @@ class DieModel:
         if not (math.isfinite(blanket_rate) and blanket_rate > 0):
             raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.blanket_rate = float(blanket_rate)
+        self._eff: dict = {}
+        self._token = object()  # marks the dies whose conditions this model set (DieModel.resume)
 
     def run(self, layout, time: float | None = None, *, density=None, width=None, space=None, incoming=None,
             level: str | None = None) -> DieResult:
@@ -131,6 +133,53 @@ class DieModel:
         template = DieResult(lay, self.process, 0.0, self.blanket_rate, self.weight.length, self.derived, self.weighting, eff, None,
                              self.conventions, self.feature_contact, dict(self.spec), level)
         return _polish(lay, self.process, self.config, self.blanket_rate, time, eff, self.feature, incoming, template)
+
+    # a die through the steps of a recipe: start once, then resume step after step (cmpsim.polisher.ride)
+    def _effective(self, lay):
+        from .density import effective_density
+
+        key = id(lay)
+        if key not in self._eff:  # the weighting's FFT once per layout (the layout kept alive with it)
+            self._eff[key] = (lay, effective_density(lay.density, lay.cell_size, self.weight))
+        return self._eff[key][1]
+
+    def _result(self, lay, ev, rate, level) -> DieResult:
+        return DieResult(lay, self.process, float(ev.t), float(rate), self.weight.length, self.derived, self.weighting, self._effective(lay),
+                         ev, self.conventions, self.feature_contact, dict(self.spec), level)
+
+    def start(self, layout, *, incoming=None, level: str | None = None) -> DieResult:
+        """The die before polishing (time 0, as deposited, over ``incoming``): the state :meth:`resume` continues."""
+        from .evolution import DieEvolution
+
+        lay = _as_layout(layout)
+        ev = DieEvolution(lay, self.process, self._effective(lay), self.blanket_rate, self.config.asperity_radius, self.feature, incoming)
+        ev.conditioned_by = self._token
+        return self._result(lay, ev, self.blanket_rate, level)
+
+    def resume(self, previous: DieResult, duration: float, *, blanket_rate: float | None = None) -> DieResult:
+        """Polish a die on from its state ``previous`` (a :meth:`start` or an earlier :meth:`resume`) for ``duration`` s more.
+
+        The die keeps its heights, remaining films and event times; from now on it is polished with
+        this model's conditions: its blanket rate (or ``blanket_rate``, m/s), the pressure of its
+        config (the pad's bulge into wide gaps) and its weighting. Every rate of the die model is
+        the blanket rate times a pressure ratio, so a step at a rate varying in time is polished
+        exactly by its mean rate over the step. ``previous`` is left as it was. The result's
+        ``time`` is the total polishing time; its event times (time_to_clear, ...) those reached so far.
+        """
+        rate = self.blanket_rate if blanket_rate is None else float(blanket_rate)
+        if not (math.isfinite(duration) and duration >= 0):
+            raise ValueError(f"duration must be >= 0 s; got {duration!r}")
+        lay = previous.layout
+        if previous.process != self.process:
+            raise ValueError("resume: the die was started with another process (film stack) than this model's")
+        ev = previous.evolution.copy()
+        if ev.conditioned_by is self._token:  # this model's pressure and weighting already: only the rate
+            ev.set_rate(rate)
+        else:
+            ev.condition(rate, self._effective(lay), self.config.asperity_radius, self.feature)
+            ev.conditioned_by = self._token
+        ev.advance_to(ev.t + float(duration))
+        return self._result(lay, ev, rate, previous.level)
 
 
 # ------------------------------------------------------------------------------ stacks

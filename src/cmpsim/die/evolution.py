@@ -26,6 +26,8 @@ method on the exact trajectory.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from .stacks import film_stack
@@ -57,13 +59,10 @@ class DieEvolution:
         (the deposited films follow it); ``step`` deepens the lower level against the upper one
         by that much, at the cell's mean height (the new films' lower level over the old one's).
         """
-        if not (np.isfinite(blanket_rate) and blanket_rate > 0):
-            raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
         self.process = process
         self.stack = film_stack(process)
-        self.rate = float(blanket_rate)
-        eff = np.asarray(effective_density, dtype=float)
-        self.f_local, eff_is_a, gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths(), layout.spaces())
+        self.f_local, self._eff_is_a, self._gap, self.za, self.zb = self.stack.levels(layout.density, layout.widths(), layout.spaces())
+        self._pitches = layout.pitches
         self.base = np.zeros(self.za.shape)  # the height of the film stack's reference (the original field oxide top)
         if incoming is not None:
             height, step = (np.broadcast_to(np.nan_to_num(np.asarray(v, dtype=float)), self.za.shape) for v in incoming)
@@ -73,10 +72,8 @@ class DieEvolution:
             self.base = height.copy()
             self.za = self.za + (1.0 - a) * step
             self.zb = self.zb - a * step
-        self.f = np.clip(eff if eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
-        self.h = contact_heights(gap, process.contact_height, asperity_radius)
-        if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
-            self.h = self.h + feature.bulge(gap, layout.pitches(), self.f)
+        self.condition(blanket_rate, effective_density, asperity_radius, feature)
+        self.conditioned_by = None  # what set the conditions (a DieModel's mark: cmpsim.die.chip.DieModel.resume)
         self.za0, self.zb0 = self.za.copy(), self.zb.copy()
         self.t = 0.0
         s0 = np.abs(self.za - self.zb)
@@ -84,6 +81,33 @@ class DieEvolution:
         self.t_copper_clear = np.full(self.za.shape, np.inf)
         # the end point: cleared (a metal stack), planarized (oxide)
         self.t_clear = np.full(self.za.shape, np.inf) if self.stack.metal else self.t_planar.copy()
+
+    def condition(self, blanket_rate: float, effective_density, asperity_radius: float, feature=None) -> None:
+        """Set what the pad does from now on: the blanket rate (m/s), the effective density the pad sees and the
+        contact heights of the gaps (from the summit radius, m, and the pad body's ``feature`` contact).
+
+        The state (both levels of every cell, the event times, the time) is kept: a later step of a recipe, at
+        another rate or pressure, continues the same die (:meth:`cmpsim.die.chip.DieModel.resume`).
+        """
+        self.set_rate(blanket_rate)
+        eff = np.asarray(effective_density, dtype=float)
+        self.f = np.clip(eff if self._eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
+        self.h = contact_heights(self._gap, self.process.contact_height, asperity_radius)
+        if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
+            self.h = self.h + feature.bulge(self._gap, self._pitches(), self.f)
+
+    def set_rate(self, blanket_rate: float) -> None:
+        """Set the blanket rate (m/s) from now on, the rest of the conditions kept (:meth:`condition`)."""
+        if not (np.isfinite(blanket_rate) and blanket_rate > 0):
+            raise ValueError(f"blanket_rate must be > 0 m/s; got {blanket_rate!r}")
+        self.rate = float(blanket_rate)
+
+    def copy(self) -> "DieEvolution":
+        """An independent copy of the state (advancing it leaves this one where it is)."""
+        new = copy.copy(self)
+        for name in ("za", "zb", "t_planar", "t_copper_clear", "t_clear"):
+            setattr(new, name, getattr(self, name).copy())
+        return new
 
     # ------------------------------------------------------------------ materials
     def _field_rate(self, za):

@@ -166,11 +166,27 @@ class DieResult:
             )
         return out
 
+    def scalars(self, hotspot_count: int | None = None) -> dict:
+        """The die's scalars of :meth:`to_dict` (SI; null where not reached or not applying): time, blanket_rate,
+        time_to_planarize, time_to_clear, step_height_max, dishing_max, erosion_max, thickness_range, hotspot_count
+        (counted against :attr:`spec` unless given) without the list of hotspots."""
+        ev = self.evolution
+        return {
+            "time": self.time,
+            "blanket_rate": self.blanket_rate,
+            "time_to_planarize": _finite(self.time_to_planarize),
+            "time_to_clear": _finite(self.time_to_clear) if ev.stack.metal else None,
+            "step_height_max": _finite(float(np.nanmax(ev.step_height))) if np.isfinite(ev.step_height).any() else None,
+            "dishing_max": _max(ev.dishing),
+            "erosion_max": _max(ev.erosion),
+            "thickness_range": self.thickness_range,
+            "hotspot_count": self.hotspot_count() if hotspot_count is None else int(hotspot_count),
+        }
+
     def to_dict(self) -> dict:
         """The object of ``cmpsim die --json`` (SI units; null where a quantity does not apply or was not reached)."""
         from .hotspots import public
 
-        ev = self.evolution
         hot = self.hotspots() if self.spec else []
         out = {
             "layout": self.layout.name,
@@ -186,14 +202,8 @@ class DieResult:
             "elliptic_truncation": self.conventions.get("elliptic_truncation"),
             "feature_contact": self.feature_contact,
             "film": self.evolution.stack.film,
-            "time_to_planarize": _finite(self.time_to_planarize),
-            "time_to_clear": _finite(self.time_to_clear) if ev.stack.metal else None,
-            "step_height_max": _finite(float(np.nanmax(ev.step_height))) if np.isfinite(ev.step_height).any() else None,
-            "dishing_max": _max(ev.dishing),
-            "erosion_max": _max(ev.erosion),
-            "thickness_range": self.thickness_range,
+            **self.scalars(hotspot_count=len(hot)),
             "spec": dict(self.spec),
-            "hotspot_count": len(hot),
             "hotspots": public(hot),
             "inputs": self.process.to_dict(),
             "units": dict(_UNITS),

@@ -12,8 +12,11 @@ pad's temperature from :mod:`cmpsim.physics.thermal` driven by the frictional po
 the Arrhenius chemical step; :func:`cmpsim.polisher.engine.polish`, ``cmpsim.polish``),
 ``pad`` (the pad's life through a recipe's time steps: glazing, conditioning, the worn summits),
 ``report`` (the JSON, CSV and plots of ``cmpsim polish --out DIR``), ``control`` (the EWMA
-run-to-run controller) and ``incoming`` (a lot's incoming profiles).
+run-to-run controller), ``incoming`` (a lot's incoming profiles) and ``ride`` (a layout riding
+along, ``cmpsim polish --die``: the die model of :mod:`cmpsim.die` at a few wafer sites, driven step
+by step by the blanket depth and the duration of each step).
 
 Lives on the studies floor beside :mod:`cmpsim.head`. May import: :mod:`cmpsim.head`, the driver
-(:mod:`cmpsim.solver`) and every floor below it, its sibling studies on the same floor, and the utilities.
+(:mod:`cmpsim.solver`) and every floor below it, its sibling studies on the same floor (:mod:`cmpsim.die`
+and :mod:`cmpsim.layout` for ``ride``; never the other way: the die model knows no recipe), and the utilities.
 """

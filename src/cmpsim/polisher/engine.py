@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 import time as _time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -165,6 +165,10 @@ class StepResult:
     endpoint: dict | None = None
     limit: float = 0.0
     glazing: dict | None = None
+    #: ``polish(die=...)``: the die at each site after the step (:meth:`cmpsim.polisher.ride.Ride.step`), else None
+    die: list | None = None
+    #: material -> the blanket depth (m) each ring would lose in the step, integral of the rate over the step (the die's drive)
+    blanket_removal: dict | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         return {
@@ -184,7 +188,7 @@ class StepResult:
             "removal_rate_profile": self.removal_rate_profile,
             "limit": self.limit,
             "glazing": self.glazing,
-        }
+        } | ({"die": self.die} if self.die is not None else {})
 
 
 UNITS = {
@@ -214,6 +218,8 @@ class PolishResult:
     solves: int
     wall_time: float
     time_step: float
+    #: ``polish(die=...)``: the ride (:class:`cmpsim.polisher.ride.Ride`: its sites and the die at each after the last step)
+    ride: object = None
 
     @property
     def target(self) -> dict | None:
@@ -236,7 +242,7 @@ class PolishResult:
             "solves": self.solves,
             "wall_time": self.wall_time,
             "units": dict(UNITS),
-        }
+        } | (self.ride.to_dict() if self.ride is not None else {})
 
     def to_json(self) -> str:
         import json
@@ -273,7 +279,7 @@ def idle(pad_state: PadState, seconds: float, config: Config) -> PadState:
 
 
 def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None = None, time_step: float = TIME_STEP,
-           rate_factor: float = 1.0, incoming=None, pad_life: PadLife | None = None) -> PolishResult:
+           rate_factor: float = 1.0, incoming=None, pad_life: PadLife | None = None, die=None) -> PolishResult:
     """Polish a recipe through time (``cmpsim polish``).
 
     Parameters
@@ -294,6 +300,10 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
     pad_life : PadLife, optional
         The pad wears and is conditioned through the steps (``pad_state.life`` carries it in and out);
         default: no wear.
+    die : cmpsim.polisher.ride.RidingDie or a layout, optional
+        A layout riding along (docs/polisher.md, "A layout riding along"): the die model at a few
+        wafer sites, each step polishing it at its site's blanket rate for the step's duration;
+        every step's ``die`` and ``PolishResult.ride`` (the die at each site after the last step).
 
     Returns
     -------
@@ -314,6 +324,11 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
     if not (math.isfinite(rate_factor) and rate_factor >= 0):
         raise ValueError(f"rate_factor must be >= 0; got {rate_factor!r}")
     configs = [recipe.step_config(s, overrides) for s in recipe.steps]  # every step checked before any solve
+    if die is not None and not hasattr(die, "prepare"):  # a layout alone: a CSV, a built-in die, a Layout
+        from .ride import RidingDie
+
+        die = RidingDie(die)
+    ride = die.prepare(recipe, configs) if die is not None else None  # the layout read and the sites checked before any solve
     solves: dict = {}
     columns: dict = {}
     pad = pad_state or PadState()
@@ -341,10 +356,12 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         if thermal.temperature.shape[-1] != column.size:
             raise RecipeError(f"{recipe.source}: {step.label}: the pad state carried in does not fit this pad's thermal column")
         result, stack, thermal, clock, life = _run_step(recipe, step, sol, column, stack, thermal, clock, time_step, rate_factor,
-                                                        pad_life, life, step_cfg)
+                                                        pad_life, life, step_cfg, ride.materials if ride is not None else ())
+        if ride is not None:
+            result.die = ride.step(step_cfg, sol.radius, result)
         pad = PadState(thermal, life if pad_life is not None else pad.life, pad.time + result.duration)
         results.append(result)
-    return PolishResult(recipe, results, initial, stack, pad, len(solves), _time.perf_counter() - t0, float(time_step))
+    return PolishResult(recipe, results, initial, stack, pad, len(solves), _time.perf_counter() - t0, float(time_step), ride)
 
 
 def _initial_stack(recipe: Recipe, sol: StepSolve, incoming) -> FilmStack:
@@ -366,7 +383,9 @@ def _initial_stack(recipe: Recipe, sol: StepSolve, incoming) -> FilmStack:
 
 def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn, stack: FilmStack, thermal: PadThermalState,
               clock: float, time_step: float, rate_factor: float, pad_life: PadLife | None = None, life: PadLifeState | None = None,
-              life_config: Config | None = None):
+              life_config: Config | None = None, track=()):
+    """Polish one step; ``pad_life``: the pad wears through it from ``life`` (the fresh pad of ``life_config``);
+    ``track``: materials whose blanket depth per ring (the integral of their rate) the step records."""
     n_films = len(stack.names)
     tops = stack.top()
     k0 = int(tops.min())  # the step's top film: the highest film left anywhere
@@ -402,6 +421,7 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
 
     signals.append(clock, reflectance_signal(stack), sol.torque, cleared(stack))
     elapsed, volume, end, detected_at = 0.0, 0.0, "time", None
+    depth = {m: np.zeros(len(sol.radius)) for m in track}
     limit = step.limit
     while elapsed < limit * (1 - 1e-12):
         dt = min(time_step, limit - elapsed)
@@ -414,6 +434,8 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
             glazing["time"].append(clock + dt)
             glazing["rate_factor"].append(pad_life.factor(life, life_config))
         rates = np.array([sol.rate_profile(m, mid) for m in stack.materials]) * factor
+        for m in track:  # the same rate the stack is polished with
+            depth[m] += (rates[stack.materials.index(m)] if m in stack.materials else factor * sol.rate_profile(m, mid)) * dt
         stack, removal = remove(stack, rates, dt)
         volume += removal.volume(stack.areas)
         elapsed += dt
@@ -438,6 +460,6 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
         removal_rate_mean=volume / (stack.wafer_area * duration) if duration > 0 else 0.0,
         pad_temperature={"time": times, "value": temps}, thickness=stack.to_dict(), signals=signals, top_film=top_name,
         cleared_fraction=cleared(stack), frictional_power=q, platen_torque=sol.torque, removed_volume=volume,
-        removal_rate_profile=profile, endpoint=endpoint, limit=limit, glazing=glazing,
+        removal_rate_profile=profile, endpoint=endpoint, limit=limit, glazing=glazing, blanket_removal=depth if track else None,
     )
     return result, stack, thermal, clock, life

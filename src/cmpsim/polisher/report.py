@@ -3,6 +3,8 @@
 - ``polish.json``: :meth:`cmpsim.polisher.engine.PolishResult.to_dict` (SI, units inside);
 - ``thickness.csv``: the thickness per radius after each step, one column per step and film
   (``radius_m``, ``<step>.<film>_m``);
+- ``die.csv`` and ``die_<k>_r<mm>mm/`` (``cmpsim polish --die``): the die per step and site, and the
+  files of ``cmpsim die`` for each site's die after the last step;
 - ``thickness.png`` (thickness per radius after each step), ``pad_temperature.png`` (the pad's
   surface temperature against time) and ``endpoint.png`` (the reflectance signal and the platen
   torque against time).
@@ -111,7 +113,38 @@ def write_files(out_dir, texts: dict, figures: dict) -> list:
     return written
 
 
+def die_csv(result) -> str:
+    """With a layout riding along: one row per step and site, the die's metrics (SI units in the header)."""
+    from .ride import SITE_KEYS
+
+    units = {"time": "s", "blanket_rate": "m_per_s", "hotspot_count": "1", "time_to_planarize": "s", "time_to_clear": "s"}
+    keys = ("radius", "duration") + SITE_KEYS
+    out = _io.StringIO()
+    out.write(",".join(["step"] + [f"{k}_{units.get(k, 's' if k == 'duration' else 'm')}" for k in keys]) + "\n")
+    for s in result.steps:
+        for d in s.die:
+            out.write(",".join([s.name] + ["" if d[k] is None else f"{d[k]:.9e}" if isinstance(d[k], float) else str(d[k]) for k in keys]) + "\n")
+    return out.getvalue()
+
+
+def site_folder(radius: float, k: int) -> str:
+    """The folder of site ``k`` (from 1) at ``radius`` (m) under ``--out``: ``die_<k>_r<mm>mm``."""
+    return f"die_{k}_r{radius * 1e3:.0f}mm"
+
+
 def write_outputs(result, out_dir) -> list:
-    """Write the files of :data:`FILES` into ``out_dir``; returns their paths."""
+    """Write the files of :data:`FILES` into ``out_dir``; returns their paths. With a layout riding along also
+    ``die.csv`` (the die per step and site) and per site the files of ``cmpsim die`` after the last step
+    (``cmpsim.die.report.write_die_outputs``) in ``die_<k>_r<mm>mm/``."""
     texts = {"polish.json": json.dumps(result.to_dict(), indent=1), "thickness.csv": thickness_csv(result)}
-    return write_files(out_dir, texts, _figures(result))
+    ride = result.ride
+    if ride is not None:
+        texts["die.csv"] = die_csv(result)
+    written = write_files(out_dir, texts, _figures(result))
+    if ride is not None:
+        from ..die.report import write_die_outputs
+
+        original = str(ride.riding.layout) if ride.layout.windowed else ""
+        for k, (r, die) in enumerate(zip(ride.radii, ride.dies), start=1):
+            written += write_die_outputs(die, Path(out_dir) / site_folder(r, k), original_file=original)
+    return written

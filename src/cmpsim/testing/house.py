@@ -27,7 +27,7 @@ FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("inputs", "the registries of the inputs: units, ranges and sources (one entry and its range check); the configuration; inputs another input sets", ("inputs",)),
     ("results", "the outputs with units and meanings; the result of one point; uniformity", ("results",)),
     ("solver", "the driver: set-up, the wafer problem, load balance, equilibrium, post-processing; one Config in, one Result out; the runner every study shares", ("solver",)),
-    ("studies", "many points: the head's studies, the polisher over time (recipes, end point, pad temperature, lot control), sweeps, validation, reproduction, calibration, the die model and the layouts it reads; test tools", ("head", "polisher", "layout", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
+    ("studies", "many points: the head's studies, the polisher over time (recipes, end point, pad temperature, lot control, a die riding along the steps), sweeps, validation, reproduction, calibration, the die model and the layouts it reads; test tools", ("head", "polisher", "layout", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
     ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.
