@@ -122,6 +122,22 @@ def test_a_warming_pad_drives_the_die_with_the_rate_the_stack_is_polished_with(c
         assert site["blanket_rate"] > start  # the warmer pad polishes faster than at the step's start
 
 
+def test_a_glazing_pad_drives_the_die_with_the_rate_the_stack_is_polished_with(chip):
+    """The pad's life through the step (no conditioning): the glazed rate falls through the step; the
+    die's blanket depth is still the copper the wafer lost at the site."""
+    from cmpsim.polisher.pad import PadLife
+
+    res = polish(_steps(("polish", 'time = "20 s"')), overrides=COARSE, pad_life=PadLife("none"), die=_riding(chip, sites=(0.03, 0.12)))
+    step = res.steps[0]
+    assert step.glazing["rate_factor"][-1] < step.glazing["rate_factor"][0] == 1.0
+    th = step.thickness
+    for site in step.die:
+        lost = 300e-9 - float(np.interp(site["radius"], th["radius"], th["copper"]))
+        assert site["blanket_rate"] * site["duration"] == pytest.approx(lost, rel=1e-9)
+        start = float(np.interp(site["radius"], step.removal_rate_profile["radius"], step.removal_rate_profile["copper"]))
+        assert site["blanket_rate"] < start  # the glazing pad polishes slower than at the step's start
+
+
 def test_resume_at_changing_rates_is_one_run_at_the_mean_rate(chip):
     """Every rate of the die model is the blanket rate times a pressure ratio: K1 t1 then K2 t2 is (K1 t1 + K2 t2) / T for T."""
     lay = layout_die(str(chip), ["1/0"], 20e-6)
