@@ -6,9 +6,10 @@ site of radius r is polished, step after step, by the die model of :mod:`cmpsim.
 
 * its **blanket rate**: the rotation-averaged removal rate of the die's film (copper for a copper
   die, oxide for an oxide die) at r, from the step's wafer solve, at the pad's temperature of
-  each time step and times ``rate_factor``: the very rate the film stack is polished with. Every
-  rate of the die model is the blanket rate times a pressure ratio, so the die is polished
-  exactly by the step's mean rate at r, the blanket depth of the step over its duration;
+  each time step, times ``rate_factor`` and the glazed pad's factor (``pad_life``): the very rate
+  the film stack is polished with. Every rate of the die model is the blanket rate times a
+  pressure ratio, so the die is polished exactly by the step's mean rate at r, the blanket depth
+  of the step over its duration;
 * its **duration** as ended: a step that stops at the end point gives the die the time it ran;
 * the step's **config**: the applied pressure (the pad body's bulge into wide gaps) and the pad
   stack (the planarization length), as ``cmpsim die`` takes them from its inputs;
