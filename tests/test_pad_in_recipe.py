@@ -4,6 +4,7 @@ and for its order in the time step; the worn summits entering the solve when ask
 
 from __future__ import annotations
 
+import re
 from importlib import resources
 
 import numpy as np
@@ -118,3 +119,27 @@ def test_a_qualified_lot_starts_on_the_monitor_wafers_pad_and_reports_it():
     assert lot.wafers[0].summit_sigma < 1.0
     with pytest.raises(ValueError, match="qualification"):
         run_lot(OXIDE, 1, overrides=COARSE, qualification=-1)
+
+
+def test_a_recipe_can_carry_its_conditioning_and_disk_and_bad_ones_are_refused():
+    from cmpsim.polisher.recipe import RecipeError, parse_recipe
+
+    text = 'conditioning = "none"\n' + OXIDE + '[conditioner]\ndown_force = "5 lbf"\nsweep_duty = 0.5\n'
+    recipe = parse_recipe(text)
+    assert recipe.conditioning == "none"
+    assert recipe.conditioner.down_force == pytest.approx(22.241108, rel=1e-6) and recipe.conditioner.sweep_duty == 0.5
+    own = polish(recipe, overrides=COARSE)  # the recipe's pad life, without pad_life=
+    given = polish(OXIDE, overrides=COARSE, pad_life=PadLife("none"))
+    assert own.steps[0].glazing["rate_factor"] == given.steps[0].glazing["rate_factor"]
+    lot = run_lot(recipe, 1, overrides=COARSE, qualification=0)
+    assert lot.conditioning == "none"  # the lot takes the recipe's conditioning unless told
+    assert run_lot(recipe, 1, overrides=COARSE, qualification=0, conditioning="in_situ").conditioning == "in_situ"
+    for top, table, words in [
+        ('conditioning = "sometimes"\n', "", "conditioning (line 1) must be one of"),
+        ("", '[conditioner]\ndown_force = "1 N"\n', "needs conditioning"),
+        ('conditioning = "in_situ"\n', "[conditioner]\nforce = 1\n", "unknown key 'force'"),
+        ('conditioning = "in_situ"\n', '[conditioner]\ndown_force = "3 m"\n', "down_force"),
+        ('conditioning = "in_situ"\n', "[conditioner]\nsweep_duty = 2\n", "sweep_duty"),
+    ]:
+        with pytest.raises(RecipeError, match=re.escape(words)):
+            parse_recipe(top + OXIDE + table)

@@ -10,7 +10,7 @@ from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
 @main.command(name="lot")
 @click.argument("recipe", type=click.Path(dir_okay=False))
 @click.option("--wafers", type=click.IntRange(min=1), default=25, show_default=True, help="Number of wafers polished in sequence on one pad.")
-@click.option("--conditioning", type=click.Choice(["none", "ex_situ", "in_situ"]), default="in_situ", show_default=True, help="The diamond disk: never, between wafers, or while polishing.")
+@click.option("--conditioning", type=click.Choice(["none", "ex_situ", "in_situ"]), default=None, help="The diamond disk: never, between wafers, or while polishing. Default: the recipe's conditioning, else in_situ.")
 @click.option("--control", type=click.Choice(["none", "ewma"]), default="none", show_default=True, help="Run-to-run control: the EWMA controller sets each wafer's polish time (feed-forward) and zone pressures (feedback).")
 @click.option("--seed", type=int, default=None, help="Seed of the incoming thickness draw (2 % spread of the mean, 1 % tilt, 1 sigma): the same seed, the same lot.")
 @click.option("--idle-time", "idle_time", default="30 s", show_default=True, metavar="TIME", help="Time between two wafers (the pad cools; ex-situ conditioning works then).")
@@ -54,7 +54,7 @@ def lot_command(recipe, wafers, conditioning, control, seed, idle_time, qualific
         for w in result.wafers
     ]
     console = Console()
-    console.print(_rich_table(f"lot of {len(rows)} wafers ({parsed.source}): control {control}, conditioning {conditioning}",
+    console.print(_rich_table(f"lot of {len(rows)} wafers ({parsed.source}): control {control}, conditioning {result.conditioning}",
                               ["wafer", "polish time (s)", "mean rate (nm/min)", "final mean (nm)", "non-uniformity (%)", "rate factor", "zone pressures (psi)"], rows))
     if result.qualification is not None:
         q = result.qualification

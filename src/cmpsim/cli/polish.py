@@ -71,6 +71,10 @@ def polish_command(recipe, assignments, time_step, as_json, out_dir, die_layout,
     if result.ride is not None:
         console.print(_rich_table(f"die {result.ride.layout.name!r} ({result.ride.process.kind}) riding along", ["step", "radius (mm)", "time (s)", "rate (nm/min)", "thickness range (nm)",
                                                                        "step height max (nm)", "dishing max (nm)", "erosion max (nm)", "hotspots"], _die_rows(result)))
+    glazed = [s for s in result.steps if s.glazing is not None]
+    if glazed:
+        console.print(f"pad life ({parsed.conditioning or 'given'} conditioning): glazed-pad rate factor "
+                      + ", ".join(f"{s.name} {s.glazing['rate_factor'][0]:.3f} -> {s.glazing['rate_factor'][-1]:.3f}" for s in glazed))
     console.print(f"{result.solves} wafer equilibria solved in {result.wall_time:.1f} s")
 
 

@@ -299,7 +299,7 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         interpolated onto the rings; default the recipe's uniform films.
     pad_life : PadLife, optional
         The pad wears and is conditioned through the steps (``pad_state.life`` carries it in and out);
-        default: no wear.
+        default: the recipe's ``conditioning`` and ``[conditioner]``, and no wear if it has none.
     die : cmpsim.polisher.ride.RidingDie or a layout, optional
         A layout riding along (docs/polisher.md, "A layout riding along"): the die model at a few
         wafer sites, each step polishing it at its site's blanket rate for the step's duration;
@@ -324,6 +324,8 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
     if not (math.isfinite(rate_factor) and rate_factor >= 0):
         raise ValueError(f"rate_factor must be >= 0; got {rate_factor!r}")
     configs = [recipe.step_config(s, overrides) for s in recipe.steps]  # every step checked before any solve
+    if pad_life is None and recipe.conditioning is not None:  # the recipe's own pad life (conditioning = ...)
+        pad_life = PadLife(recipe.conditioning, recipe.conditioner)
     if die is not None and not hasattr(die, "prepare"):  # a layout alone: a CSV, a built-in die, a Layout
         from .ride import RidingDie
 

@@ -169,7 +169,7 @@ def run_lot(
     recipe,
     wafers: int = 25,
     *,
-    conditioning: str = "in_situ",
+    conditioning: str | None = None,
     control: str = "none",
     seed: int | None = None,
     overrides: dict | None = None,
@@ -192,8 +192,9 @@ def run_lot(
         ``[target] remaining`` and a timed step.
     wafers : int
         Number of wafers, >= 1.
-    conditioning : "none" | "ex_situ" | "in_situ"
-        The conditioning disk: never, between wafers (for ``idle_time``), or while polishing.
+    conditioning : "none" | "ex_situ" | "in_situ", optional
+        The conditioning disk: never, between wafers (for ``idle_time``), or while polishing; default
+        the recipe's ``conditioning``, else "in_situ".
     control : "none" | "ewma"
         Without control every wafer runs the recipe as written; with EWMA the controller sets each
         wafer's polish time and zone pressures.
@@ -206,7 +207,8 @@ def run_lot(
     idle_time : float
         Seconds between two wafers (the pad cools; ex-situ conditioning works then).
     disk, pad : optional
-        The conditioning disk and the fresh pad of :mod:`cmpsim.physics.padlife` (defaults: its calibration).
+        The conditioning disk (default the recipe's ``[conditioner]``, else the calibrated disk) and the
+        fresh pad (default each step's own, :func:`cmpsim.polisher.pad.fresh_pad`).
     weight, zone_weight : float
         The EWMA weights of the rate and of the profile.
     time_step : float
@@ -220,6 +222,10 @@ def run_lot(
     """
     t0 = _time.perf_counter()
     recipe = load_recipe(recipe)
+    if conditioning is None:
+        conditioning = recipe.conditioning or "in_situ"
+    if disk is None:
+        disk = recipe.conditioner
     if not (isinstance(wafers, (int, np.integer)) and wafers >= 1):
         raise ValueError(f"wafers must be a whole number >= 1; got {wafers!r}")
     if conditioning not in CONDITIONING:

@@ -17,6 +17,13 @@ A recipe is TOML::
     [target]
     remaining = "500 nm"        # optional: the remaining thickness aimed at (reported against)
 
+and optionally the pad's life (docs/polisher.md, "Pad life in a recipe")::
+
+    conditioning = "in_situ"    # "none" | "ex_situ" | "in_situ": the pad glazes through the steps
+    [conditioner]               # optional: the diamond disk (cmpsim.physics.padlife.ConditionerDisk)
+    down_force = "22.24 N"      # F_d, a force with units (default 22.24 N = 5 lbf)
+    sweep_duty = 1.0            # share of the pad track the disk works per unit time, in [0, 1]
+
 Parsed into frozen dataclasses (:class:`Recipe`, :class:`Film`, :class:`Step`, :class:`Target`),
 SI inside. Every error is a :class:`RecipeError` (a ``ValueError``) that names the step or film
 (its index, from 1, and name) and, where the TOML text gives it, the line.
@@ -35,6 +42,7 @@ from ..inputs.units import to_si
 from ..io import read_text
 from ..physics.films import FILM_CONSTANTS
 from ..physics.materials import FILMS
+from ..physics.padlife import CONDITIONING, DEFAULT_DISK, ConditionerDisk
 
 __all__ = ["RecipeError", "Film", "Step", "Target", "Recipe", "parse_recipe", "read_recipe", "load_recipe", "STEP_KEYS", "DEFAULT_ENDPOINT_FRACTION"]
 
@@ -98,7 +106,8 @@ class Target:
 @dataclass(frozen=True)
 class Recipe:
     """A parsed recipe (SI): ``preset`` (or None), ``inputs`` for every step ((name, value) pairs),
-    ``films`` (top first), ``steps`` (in order), ``target`` and ``source`` (the file or "recipe")."""
+    ``films`` (top first), ``steps`` (in order), ``target``, ``source`` (the file or "recipe") and the
+    pad's life: ``conditioning`` (None: no wear) with its ``conditioner`` disk."""
 
     preset: str | None
     inputs: tuple
@@ -107,6 +116,10 @@ class Recipe:
     target: Target = field(default_factory=Target)
     source: str = "recipe"
     text: str = field(default="", repr=False, compare=False)
+    #: The pad's life through the steps: "none" | "ex_situ" | "in_situ", or None (the pad does not wear).
+    conditioning: str | None = None
+    #: The conditioning disk of ``[conditioner]`` (None: the calibrated default disk).
+    conditioner: ConditionerDisk | None = None
 
     def base_config(self, overrides: dict | None = None) -> Config:
         """The configuration every step starts from: the preset, the recipe's inputs, then ``overrides``."""
@@ -205,12 +218,13 @@ def parse_recipe(text: str, source: str = "recipe") -> Recipe:
     films_raw = data.pop("film", None)
     steps_raw = data.pop("step", None)
     target_raw = data.pop("target", None)
+    conditioning, conditioner = _pad_life(data.pop("conditioning", None), data.pop("conditioner", None), source, at)
     if isinstance(films_raw, str):
         raise RecipeError(f"{source}: film = {films_raw!r}{at('film')}: the films are [[film]] tables (material, thickness), top first; the film of each solve follows the material exposed")
     inputs = []
     for name, value in data.items():
         if isinstance(value, dict):
-            raise RecipeError(f"{source}: unknown table [{name}]; a recipe has [[film]], [[step]] and [target] tables")
+            raise RecipeError(f"{source}: unknown table [{name}]; a recipe has [[film]], [[step]], [target] and [conditioner] tables")
         if name not in PARAMETERS:
             raise RecipeError(f"{source}: unknown input {name!r}{at(name)} (cmpsim params lists the inputs)")
         inputs.append((name, value))
@@ -322,7 +336,29 @@ def parse_recipe(text: str, source: str = "recipe") -> Recipe:
             if not (math.isfinite(rem) and 0 <= rem < films[0].thickness):
                 raise RecipeError(f"{source}: [target]: remaining must be in [0, {films[0].thickness:g}) m (below the top film's thickness); got {rem:g} m")
             target = Target(float(rem))
-    return Recipe(preset, tuple(inputs), tuple(films), tuple(steps), target, source, text)
+    return Recipe(preset, tuple(inputs), tuple(films), tuple(steps), target, source, text, conditioning, conditioner)
+
+
+def _pad_life(conditioning, conditioner, source: str, at):
+    """The recipe's ``conditioning`` and ``[conditioner]`` table, checked: (mode or None, disk or None)."""
+    if conditioning is not None and conditioning not in CONDITIONING:
+        raise RecipeError(f"{source}: conditioning{at('conditioning')} must be one of {', '.join(map(repr, CONDITIONING))}; got {conditioning!r}")
+    if conditioner is None:
+        return conditioning, None
+    if not isinstance(conditioner, dict):
+        raise RecipeError(f"{source}: conditioner{at('conditioner')} is a table: [conditioner] with down_force (e.g. \"22.24 N\") and sweep_duty (0-1)")
+    if conditioning is None:
+        raise RecipeError(f"{source}: [conditioner] needs conditioning = \"none\" | \"ex_situ\" | \"in_situ\" at the top of the recipe")
+    unknown = set(conditioner) - {"down_force", "sweep_duty"}
+    if unknown:
+        raise RecipeError(f"{source}: [conditioner]: unknown key {sorted(unknown)[0]!r}; the disk has down_force and sweep_duty")
+    try:
+        force = to_si(conditioner.get("down_force", DEFAULT_DISK.down_force), "N", "down_force", example="N")
+        duty = float(conditioner.get("sweep_duty", DEFAULT_DISK.sweep_duty))
+        disk = ConditionerDisk(float(force), duty, DEFAULT_DISK.rate_constant)
+    except (TypeError, ValueError) as exc:
+        raise RecipeError(f"{source}: [conditioner]: {exc}") from None
+    return conditioning, disk
 
 
 def read_recipe(path) -> Recipe:
