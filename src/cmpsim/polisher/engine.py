@@ -51,7 +51,7 @@ from ..solver.model import solve
 from ..solver.postprocess import removal_law_fields, stress_fields
 from ..physics.padlife import PadLifeState
 from .endpoint import EndpointDetector, EndpointTrace, cleared_level, platen_torque, reflectance_signal
-from .pad import PadLife, worn_overrides
+from .pad import PadLife, StepWear, worn_overrides
 from .recipe import Recipe, RecipeError, Step, load_recipe
 from .stack import FilmStack, remove
 
@@ -339,10 +339,11 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
     clock = 0.0
     results = []
     for step, step_cfg in zip(recipe.steps, configs):
-        life, cfg = None, step_cfg
+        life, wear, cfg = None, None, step_cfg
         if pad_life is not None:  # the worn summits may enter the step's solve (the fresh pad is the step's own)
             life = pad.life if isinstance(pad.life, PadLifeState) else PadLifeState()
-            worn = worn_overrides(step_cfg, life, pad_life.pad_for(step_cfg)) if pad_life.worn_summits else {}
+            wear = pad_life.at(step_cfg)
+            worn = worn_overrides(step_cfg, life, wear.pad) if pad_life.worn_summits else {}
             cfg = step_cfg.replace(**worn) if worn else step_cfg
         key = _config_key(cfg)
         if key not in solves:
@@ -358,7 +359,7 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         if thermal.temperature.shape[-1] != column.size:
             raise RecipeError(f"{recipe.source}: {step.label}: the pad state carried in does not fit this pad's thermal column")
         result, stack, thermal, clock, life = _run_step(recipe, step, sol, column, stack, thermal, clock, time_step, rate_factor,
-                                                        pad_life, life, step_cfg, ride.materials if ride is not None else ())
+                                                        wear, life, ride.materials if ride is not None else ())
         if ride is not None:
             result.die = ride.step(step_cfg, sol.radius, result)
         pad = PadState(thermal, life if pad_life is not None else pad.life, pad.time + result.duration)
@@ -384,9 +385,9 @@ def _initial_stack(recipe: Recipe, sol: StepSolve, incoming) -> FilmStack:
 
 
 def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn, stack: FilmStack, thermal: PadThermalState,
-              clock: float, time_step: float, rate_factor: float, pad_life: PadLife | None = None, life: PadLifeState | None = None,
-              life_config: Config | None = None, track=()):
-    """Polish one step; ``pad_life``: the pad wears through it from ``life`` (the fresh pad of ``life_config``);
+              clock: float, time_step: float, rate_factor: float, wear: StepWear | None = None, life: PadLifeState | None = None,
+              track=()):
+    """Polish one step; ``wear``: the pad wears through it from ``life`` (:meth:`cmpsim.polisher.pad.PadLife.at`);
     ``track``: materials whose blanket depth per ring (the integral of their rate) the step records."""
     n_films = len(stack.names)
     tops = stack.top()
@@ -407,10 +408,11 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
     start_temperature = float(thermal.surface)
     glazing = None
     start_factor = rate_factor
-    if pad_life is not None:
-        glazed = pad_life.factor(life, life_config)
+    if wear is not None:
+        summits = wear.summits(life)
+        glazed = float(np.asarray(summits.rate_factor))
         start_factor = rate_factor * glazed
-        glazing = {"time": [clock], "rate_factor": [glazed], "summit_sigma": pad_life.summit_sigma(life, life_config)}
+        glazing = {"time": [clock], "rate_factor": [glazed], "summit_sigma": float(np.asarray(summits.sigma))}
     profile = {"radius": [float(x) for x in sol.radius]}
     for m in dict.fromkeys(stack.materials):
         profile[m] = [float(x) for x in start_factor * sol.rate_profile(m, start_temperature)]
@@ -430,11 +432,11 @@ def _run_step(recipe: Recipe, step: Step, sol: StepSolve, column: ThermalColumn,
         mid = float(column.advance(thermal, q, 0.5 * dt).surface)
         thermal = column.advance(thermal, q, dt)
         factor = rate_factor
-        if pad_life is not None:  # the glazing of the time step at mid-step (second order in dt)
-            factor = rate_factor * pad_life.factor(pad_life.advance(life, life_config, 0.5 * dt), life_config)
-            life = pad_life.advance(life, life_config, dt)
+        if wear is not None:  # the glazing of the time step at mid-step (second order in dt)
+            factor = rate_factor * wear.factor(wear.advance(life, 0.5 * dt))
+            life = wear.advance(life, dt)
             glazing["time"].append(clock + dt)
-            glazing["rate_factor"].append(pad_life.factor(life, life_config))
+            glazing["rate_factor"].append(wear.factor(life))
         rates = np.array([sol.rate_profile(m, mid) for m in stack.materials]) * factor
         for m in track:  # the same rate the stack is polished with
             depth[m] += (rates[stack.materials.index(m)] if m in stack.materials else factor * sol.rate_profile(m, mid)) * dt

@@ -28,6 +28,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..inputs.config import Config
+from ..solver.setup import summit_geometry
 from ..physics.padlife import (
     CONDITIONING,
     DEFAULT_DISK,
@@ -35,24 +36,20 @@ from ..physics.padlife import (
     ConditionerDisk,
     FreshPad,
     PadLifeState,
+    SummitConstants,
     advance_pad_life,
     summit_constants,
 )
 
-__all__ = ["PadLife", "fresh_pad", "worn_overrides", "sliding_speed"]
+__all__ = ["PadLife", "StepWear", "fresh_pad", "worn_overrides", "sliding_speed"]
 
 
 def fresh_pad(config: Config) -> FreshPad:
-    """The fresh pad of ``config``: its effective summit std (m), density (1/m^2) and radius (m) as
-    the solver sets them up (``roughness_scaling``), its ``contact_cutoff``, and the calibrated wear
-    coefficient k_w of :data:`cmpsim.physics.padlife.DEFAULT_PAD` (Jeong et al. 2024)."""
-    sigma = float(config.pad_roughness)
-    if config.roughness_scaling == "self_similar":
-        ratio = sigma / config.reference_roughness
-        radius, density = config.asperity_radius * ratio, config.asperity_density / ratio**2
-    else:
-        radius, density = config.asperity_radius, config.asperity_density
-    return replace(DEFAULT_PAD, sigma=sigma, density=float(density), radius=float(radius), cutoff=float(config.contact_cutoff))
+    """The fresh pad of ``config``: its summit std (m), radius (m) and density (1/m^2) as the solver
+    sets them up (:func:`cmpsim.solver.setup.summit_geometry`), its ``contact_cutoff``, and the
+    calibrated wear coefficient k_w of :data:`cmpsim.physics.padlife.DEFAULT_PAD` (Jeong et al. 2024)."""
+    sigma, radius, density = summit_geometry(config)
+    return replace(DEFAULT_PAD, sigma=float(sigma), density=float(density), radius=float(radius), cutoff=float(config.contact_cutoff))
 
 
 def sliding_speed(config: Config) -> float:
@@ -93,19 +90,32 @@ class PadLife:
         if self.conditioning not in CONDITIONING:
             raise ValueError(f"conditioning must be one of {CONDITIONING}; got {self.conditioning!r}")
 
-    def pad_for(self, config: Config) -> FreshPad:
-        """The fresh pad of a step: the given one, or the step's config's."""
-        return self.pad if self.pad is not None else fresh_pad(config)
+    def at(self, config: Config) -> "StepWear":
+        """The pad's wear in a step of ``config``: its applied pressure, the sliding speed, the disk and
+        the fresh pad (the given one, or the step's config's), resolved once for the step's time steps."""
+        return StepWear(float(config.applied_pressure), sliding_speed(config), self.conditioning,
+                        self.disk if self.disk is not None else DEFAULT_DISK, self.pad if self.pad is not None else fresh_pad(config))
 
-    def advance(self, state: PadLifeState, config: Config, dt: float) -> PadLifeState:
-        """The pad after ``dt`` s of polishing at ``config``'s applied pressure (Pa) and sliding speed (eq. L2)."""
-        return advance_pad_life(state, config.applied_pressure, sliding_speed(config), dt, self.conditioning,
-                                self.disk if self.disk is not None else DEFAULT_DISK, self.pad_for(config))
 
-    def factor(self, state: PadLifeState, config: Config) -> float:
+@dataclass(frozen=True)
+class StepWear:
+    """The pad's wear in one step (:meth:`PadLife.at`): nominal ``pressure`` P (Pa), ``sliding_speed``
+    U (m/s), the ``conditioning`` mode, the ``disk`` and the fresh ``pad``."""
+
+    pressure: float
+    sliding_speed: float
+    conditioning: str
+    disk: ConditionerDisk
+    pad: FreshPad
+
+    def advance(self, state: PadLifeState, dt: float) -> PadLifeState:
+        """The pad after ``dt`` s of polishing in the step (eq. L2, exact)."""
+        return advance_pad_life(state, self.pressure, self.sliding_speed, dt, self.conditioning, self.disk, self.pad)
+
+    def summits(self, state: PadLifeState) -> SummitConstants:
+        """The worn pad's summit constants relative to the fresh pad's and its rate factor (eqs. L3, L4)."""
+        return summit_constants(state, self.pad)
+
+    def factor(self, state: PadLifeState) -> float:
         """The glazed pad's rate factor RR/RR_fresh (eq. L4), dimensionless."""
-        return float(np.asarray(summit_constants(state, self.pad_for(config)).rate_factor))
-
-    def summit_sigma(self, state: PadLifeState, config: Config) -> float:
-        """The worn summit std over the fresh one (eq. L3), dimensionless."""
-        return float(np.asarray(summit_constants(state, self.pad_for(config)).sigma))
+        return float(np.asarray(self.summits(state).rate_factor))

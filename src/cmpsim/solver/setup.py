@@ -24,7 +24,7 @@ from ..physics.padstack import LayeredFoundation, WinklerFoundation
 from ..operators.reynolds import LubricationParameters
 from .wafer import WaferProblem
 
-__all__ = ["PhysicalSetup", "physical_setup", "build_problem", "effective_modulus", "pad_foundation", "HAFF_T"]
+__all__ = ["PhysicalSetup", "physical_setup", "summit_geometry", "build_problem", "effective_modulus", "pad_foundation", "HAFF_T"]
 
 #: Haff's pressure constant t; the paper gives only t/a = 1, so t = a = 1 (docs/model.md).
 HAFF_T = 1.0
@@ -55,15 +55,23 @@ def pad_foundation(config: Config) -> WinklerFoundation | LayeredFoundation | No
     return models.pad_model(config).foundation
 
 
-def physical_setup(config: Config) -> PhysicalSetup:
-    """Pad, roughness, kinematics, grain-flow parameters, edge pressure and grid of a Config."""
+def summit_geometry(config: Config) -> tuple:
+    """The pad summits the solver sets up: (summit-height std sigma_s (m), summit radius R (m),
+    summit density eta (1/m^2)). ``roughness_scaling = "self_similar"`` scales the radius and density
+    given at ``reference_roughness`` with r = sigma_s / sigma_ref (R r, eta / r^2); ``"fixed_summits"``
+    takes them as given (docs/model.md, "Changing the pad roughness")."""
     c = config
     sigma = c.pad_roughness
     if c.roughness_scaling == "self_similar":
         ratio = sigma / c.reference_roughness
-        radius, density = c.asperity_radius * ratio, c.asperity_density / ratio**2
-    else:
-        radius, density = c.asperity_radius, c.asperity_density
+        return sigma, c.asperity_radius * ratio, c.asperity_density / ratio**2
+    return sigma, c.asperity_radius, c.asperity_density
+
+
+def physical_setup(config: Config) -> PhysicalSetup:
+    """Pad, roughness, kinematics, grain-flow parameters, edge pressure and grid of a Config."""
+    c = config
+    sigma, radius, density = summit_geometry(c)
     pad = PadSurface(
         sigma_s=sigma,
         asperity_density=density,
