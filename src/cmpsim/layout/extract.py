@@ -65,7 +65,8 @@ def window_fields(area: np.ndarray, boundary: np.ndarray, window: float):
     return density, width, np.maximum(space, 0.0)
 
 
-def _dbu_count(value: float, dbu: float, what: str) -> int:
+def dbu_count(value: float, dbu: float, what: str) -> int:
+    """``value`` (m) as a whole number of database units ``dbu`` (m); a ValueError naming ``what`` if it is not one (to 1e-6)."""
     n = value / dbu
     k = round(n)
     if abs(n - k) > 1e-6 * max(1.0, abs(n)):
@@ -106,7 +107,7 @@ def extract_windows(layout: Layout | str | os.PathLike, layers, window: float, *
     dbu = layout.dbu
     if not (isinstance(window, (int, float)) and window > 0 and math.isfinite(window)):
         raise ValueError(f"window = {window!r} must be a positive length in metres")
-    w = _dbu_count(window, dbu, "window")
+    w = dbu_count(window, dbu, "window")
     box = cell.bounding_box()
     if box is None:
         raise ValueError(f"top cell {cell.name!r} is empty")
@@ -117,7 +118,7 @@ def extract_windows(layout: Layout | str | os.PathLike, layers, window: float, *
     if origin is None:
         ox, oy = int(bx0), int(by0)
     else:
-        ox, oy = _dbu_count(origin[0], dbu, "origin x"), _dbu_count(origin[1], dbu, "origin y")
+        ox, oy = dbu_count(origin[0], dbu, "origin x"), dbu_count(origin[1], dbu, "origin y")
     nx = max(int(math.ceil((bx1 - ox) / w)), 1)
     ny = max(int(math.ceil((by1 - oy) / w)), 1)
 

@@ -38,7 +38,7 @@ from pathlib import Path
 import gdstk
 import numpy as np
 
-from .extract import LayoutWindows, window_fields
+from .extract import LayoutWindows, dbu_count, window_fields
 from .hierarchy import _orientation, placements
 from .layermaps import parse_layer, resolve_layers
 from .reader import Layout, layers_in, read_layout, top_cell
@@ -316,14 +316,6 @@ class FillSites:
         return float(self.size) ** 2 / float(self.window) ** 2
 
 
-def _dbu(value: float, dbu: float, what: str) -> int:
-    n = value / dbu
-    k = round(n)
-    if abs(n - k) > 1e-6 * max(1.0, abs(n)):
-        raise ValueError(f"{what} = {value!r} m is not a whole number of database units ({dbu:g} m)")
-    return int(k)
-
-
 def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindows, rules: FillRules, *,
                top: str | None = None, pdk: str | None = None, layer_map=None, flat_limit: int = 2_000_000) -> FillSites:
     """The free fill sites of every window of ``windows`` (the grid of :func:`extract_windows`).
@@ -348,9 +340,9 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
         listing = ", ".join(f"{l}/{d}" for l, d in sorted(present))
         raise ValueError(f"layers {want} are not in {layout.path.name}: fill would ignore every drawn shape; "
                          f"its layers are: {listing}")
-    W = _dbu(windows.window, dbu, "window")
-    s = _dbu(rules.size, dbu, "fill size")
-    g = _dbu(rules.spacing, dbu, "fill spacing")
+    W = dbu_count(windows.window, dbu, "window")
+    s = dbu_count(rules.size, dbu, "fill size")
+    g = dbu_count(rules.spacing, dbu, "fill spacing")
     k = rules.keepout / dbu
     e = rules.edge / dbu
     p = s + g
@@ -358,7 +350,7 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
     if m < 1:
         raise ValueError(f"window = {windows.window:g} m is smaller than one fill pitch ({rules.pitch:g} m): choose a larger window")
     ny, nx = windows.density.shape
-    ox, oy = _dbu(windows.origin[0], dbu, "origin x"), _dbu(windows.origin[1], dbu, "origin y")
+    ox, oy = dbu_count(windows.origin[0], dbu, "origin x"), dbu_count(windows.origin[1], dbu, "origin y")
     i = np.arange(m)
     lx = (ox + (np.arange(nx)[:, None] * W + g // 2 + i[None, :] * p)).ravel().astype(float)
     ly = (oy + (np.arange(ny)[:, None] * W + g // 2 + i[None, :] * p)).ravel().astype(float)
