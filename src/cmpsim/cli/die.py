@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
+from .group import _fail, _rich_table, command_errors, main
 from .inputs import config_options, load_config, parse_assignments
 
 
@@ -54,7 +54,6 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     from ..die.chip import is_layout_file, layout_die, read_stack, simulate_stack
     from ..die.hotspots import parse_spec
     from ..die.report import to_json, write_die_outputs
-    from ..solver.equilibrium import EquilibriumError
     from ..inputs.units import to_si
 
     if list_dies:
@@ -69,7 +68,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     plan = fill_file = None
     fill_given = [name for name, v in (("--fill-layer", fill_layer), ("--fill-size", fill_size), ("--fill-spacing", fill_spacing),
                                        ("--fill-keepout", fill_keepout), ("--fill-edge", fill_edge)) if v]
-    try:
+    with command_errors("no equilibrium of the wafer solve"):
         if fill_given and not fill:
             raise ValueError(f"{', '.join(fill_given)} {'needs' if len(fill_given) == 1 else 'need'} --fill")
         if not real:
@@ -124,10 +123,6 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
         else:
             rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
             result = simulate(layout, t, config=cfg, blanket_rate=rate, **kwargs)
-    except EquilibriumError as exc:
-        _fail(f"no equilibrium of the wafer solve: {exc}", EXIT_NO_EQUILIBRIUM)
-    except ValueError as exc:
-        _fail(str(exc))
     if out_dir:
         try:
             written = write_die_outputs(result, out_dir, original_file=str(layout_arg) if real else "")

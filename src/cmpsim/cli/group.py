@@ -3,6 +3,7 @@ warning lines on stderr, and the terminal tables."""
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import sys
 import warnings
@@ -19,6 +20,21 @@ EXIT_NO_EQUILIBRIUM = 3
 def _fail(message: str, code: int = EXIT_INPUT):
     click.echo(f"cmpsim: error: {message}", err=True)
     sys.exit(code)
+
+
+@contextlib.contextmanager
+def command_errors(no_equilibrium: str = "no equilibrium"):
+    """What a command does when its work fails: bad input (a ``ValueError`` naming the parameter)
+    exits with status 2 and its message; a wafer equilibrium that was not found exits with status 3,
+    ``<no_equilibrium>: <why>``. The commands write their files after the block, so nothing is written."""
+    from ..operators.state import EquilibriumError
+
+    try:
+        yield
+    except EquilibriumError as exc:
+        _fail(f"{no_equilibrium}: {exc}", EXIT_NO_EQUILIBRIUM)
+    except ValueError as exc:
+        _fail(str(exc))
 
 
 def _warn(message: str) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
+from .group import _rich_table, command_errors, main
 
 
 @main.command(name="lot")
@@ -28,19 +28,14 @@ def lot_command(recipe, wafers, conditioning, control, seed, idle_time, qualific
     from ..inputs.units import to_si
     from ..polisher.lot import run_lot, write_lot
     from ..polisher.recipe import read_recipe
-    from ..solver.equilibrium import EquilibriumError
     from .inputs import parse_assignments
 
-    try:
+    with command_errors():
         parsed = read_recipe(recipe)
         overrides = parse_assignments(assignments)
         idle = to_si(idle_time, "s", "--idle-time", example="s")
         result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle,
                          qualification=qualification, worn_summits=worn_summits)
-    except EquilibriumError as exc:
-        _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
-    except ValueError as exc:
-        _fail(str(exc))
     if out_dir is not None:
         write_lot(result, out_dir)
     if as_json:

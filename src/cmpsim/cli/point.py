@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import EXIT_NO_EQUILIBRIUM, _fail, _warn, main
+from .group import _fail, _warn, command_errors, main
 from .inputs import config_options, load_config
 
 
@@ -29,7 +29,6 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
     `[slurry]` `[pad]` `[numerics]` or flat keys; values with units such as "4 psi" or SI
     numbers). See `cmpsim params`.
     """
-    from ..solver.equilibrium import EquilibriumError
     from ..solver.model import solve
 
     if config and config_path:
@@ -38,12 +37,8 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
         cfg = load_config(config or config_path, assignments, preset, grid)
     except ValueError as exc:
         _fail(str(exc))
-    try:
+    with command_errors():
         result = solve(cfg, check_roots=check_roots, relative=relative)
-    except EquilibriumError as exc:
-        _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
-    except ValueError as exc:
-        _fail(str(exc))
     schema = int(schema)
     if schema == 1:
         _warn("--schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
+from .group import _rich_table, command_errors, main
 
 
 @main.command(name="polish")
@@ -34,19 +34,14 @@ def polish_command(recipe, assignments, time_step, as_json, out_dir, die_layout,
     from ..inputs.units import to_si
     from ..polisher.engine import polish
     from ..polisher.recipe import read_recipe
-    from ..solver.equilibrium import EquilibriumError
     from .inputs import parse_assignments
 
-    try:
+    with command_errors():
         parsed = read_recipe(recipe)
         overrides = parse_assignments(assignments)
         dt = to_si(time_step, "s", "--time-step", example="s")
         die = _riding_die(die_layout, layers, pdk, layer_map, top, window_text, sites_text, die_params, specs)
         result = polish(parsed, overrides=overrides, time_step=dt, die=die)
-    except EquilibriumError as exc:
-        _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
-    except ValueError as exc:
-        _fail(str(exc))
     if out_dir is not None:
         from ..polisher.report import write_outputs
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import EXIT_NO_EQUILIBRIUM, _fail, _rich_table, main
+from .group import _rich_table, command_errors, main
 from .inputs import config_options, load_config
 
 
@@ -35,20 +35,15 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
     """
     import json
 
-    from ..solver.equilibrium import EquilibriumError
     from ..head.tuning import CLI_NAMES, tune_zones_from_text
 
-    try:
+    with command_errors():
         cfg = load_config(config_path, assignments, preset, grid)
         if incoming is not None and polish_time is None:
             raise ValueError("--incoming needs --polish-time (e.g. --polish-time '60 s')")
         if polish_time is not None and incoming is None:
             raise ValueError("--polish-time needs --incoming FILE.csv (the incoming thickness profile)")
         result = tune_zones_from_text(cfg, bounds, keep=keep, ring=ring, ring_bounds=ring_bounds, names=CLI_NAMES, incoming=incoming, polish_time=polish_time)
-    except EquilibriumError as exc:
-        _fail(f"no equilibrium: {exc}", EXIT_NO_EQUILIBRIUM)
-    except ValueError as exc:
-        _fail(str(exc))
     if as_json:
         click.echo(json.dumps(result.to_dict()))
         return
