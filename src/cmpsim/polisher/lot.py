@@ -12,8 +12,7 @@ docs/polisher.md; calibrated to Jeong et al. 2024, compared with Lawing 2004); w
 Before the lot, ``qualification`` monitor wafers (1 by default) run the recipe as written on the
 same pad, at the nominal incoming thickness: a fab commonly measures a blanket monitor's removal
 rate when a lot starts on a tool (practice, not sourced here), and that measurement seeds the
-EWMA's rate estimate. The
-pad they polished (warmed, worn, conditioned) is the pad the lot starts on. With ``qualification =
+EWMA's rate estimate. The pad they polished (warmed, worn, conditioned) is the pad the lot starts on. With ``qualification =
 0`` the lot starts on the fresh pad and the controller is seeded by the model's prediction for it.
 
 The incoming thickness of the top film varies from wafer to wafer
@@ -34,7 +33,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..results.uniformity import weighted_std_over_mean
-from ..physics.padlife import CONDITIONING, ConditionerDisk, FreshPad, PadLifeState, condition_ex_situ
+from ..physics.padlife import ConditionerDisk, FreshPad, PadLifeState
 from .control import ControllerState, EWMAController, feed_forward_time, update_rate, zone_correction
 from .engine import PadState, idle, polish
 from .incoming import incoming_profiles
@@ -228,8 +227,7 @@ def run_lot(
         disk = recipe.conditioner
     if not (isinstance(wafers, (int, np.integer)) and wafers >= 1):
         raise ValueError(f"wafers must be a whole number >= 1; got {wafers!r}")
-    if conditioning not in CONDITIONING:
-        raise ValueError(f"conditioning must be one of {CONDITIONING}; got {conditioning!r}")
+    life_model = PadLife(conditioning, disk, pad, worn_summits)  # checks the conditioning
     if control not in CONTROL:
         raise ValueError(f"control must be one of {CONTROL}; got {control!r}")
     if not (math.isfinite(idle_time) and idle_time >= 0):
@@ -243,19 +241,13 @@ def run_lot(
     step_k = _controlled_step(recipe) if control == "ewma" else None
     base = recipe.step_config(recipe.steps[step_k if step_k is not None else 0], overrides)
 
-    life_model = PadLife(conditioning, disk, pad, worn_summits)
-
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
-        life = result.pad_state.life
-        if conditioning == "ex_situ":
-            life = condition_ex_situ(life, idle_time, disk)
         cooled = idle(result.pad_state, idle_time, base)
-        return PadState(cooled.thermal, life, cooled.time)
+        return PadState(cooled.thermal, life_model.idle(result.pad_state.life, idle_time), cooled.time)
 
     # the wafer's radii and the controller's first rate: the monitor wafers on the lot's pad (or the
     # model's rate on a fresh pad), polished with the recipe as written at the nominal films
     pad_state = PadState(life=PadLifeState())
-    qualified = None
     if qualification:
         solves = 0
         for _ in range(qualification):
@@ -267,8 +259,10 @@ def run_lot(
         solves = first.solves
     first_time = sum(s.duration for s in first.steps)
     first_removed = first.initial.mean_thickness(0) - first.final.mean_thickness(0)
-    if qualification:
-        qualified = {"wafers": int(qualification), "polish_time": float(first_time), "removal_rate_mean": float(first_removed / first_time) if first_time > 0 else 0.0}
+    qualified = None if not qualification else {
+        "wafers": int(qualification), "polish_time": float(first_time),
+        "removal_rate_mean": float(first_removed / first_time) if first_time > 0 else 0.0,
+    }
     radius = np.asarray(first.initial.radius, dtype=float)
     weights = np.asarray(first.initial.areas, dtype=float) / float(np.sum(first.initial.areas))  # the wafer-area mean of the stack
     top = recipe.films[0]

@@ -38,6 +38,7 @@ from ..physics.padlife import (
     PadLifeState,
     SummitConstants,
     advance_pad_life,
+    condition_ex_situ,
     summit_constants,
 )
 
@@ -89,6 +90,13 @@ class PadLife:
     def __post_init__(self) -> None:
         if self.conditioning not in CONDITIONING:
             raise ValueError(f"conditioning must be one of {CONDITIONING}; got {self.conditioning!r}")
+
+    def idle(self, state: PadLifeState, seconds: float) -> PadLifeState:
+        """The pad after ``seconds`` between wafers: conditioned by the disk ex situ (eq. L2 with P = 0),
+        unchanged otherwise (in situ the disk works only while polishing)."""
+        if self.conditioning != "ex_situ":
+            return state
+        return condition_ex_situ(state, seconds, self.disk if self.disk is not None else DEFAULT_DISK)
 
     def at(self, config: Config) -> "StepWear":
         """The pad's wear in a step of ``config``: its applied pressure, the sliding speed, the disk and
