@@ -143,3 +143,19 @@ def test_a_recipe_can_carry_its_conditioning_and_disk_and_bad_ones_are_refused()
     ]:
         with pytest.raises(RecipeError, match=re.escape(words)):
             parse_recipe(top + OXIDE + table)
+
+
+def test_a_lot_solves_a_wafer_whose_inputs_repeat_once_and_the_reuse_changes_nothing():
+    """Without control every wafer has the monitor's inputs: one solve serves the lot (polish's cache),
+    and a recipe polished from that cache equals one polished alone, bit for bit."""
+    lot = run_lot(OXIDE, 3, conditioning="in_situ", seed=1, overrides=COARSE)
+    assert lot.solves == 1
+    cache: dict = {}
+    first = polish(OXIDE, overrides=COARSE, cache=cache)
+    again = polish(OXIDE, overrides=COARSE, cache=cache)
+    alone = polish(OXIDE, overrides=COARSE)
+    assert (first.solves, again.solves, alone.solves) == (1, 0, 1)
+    assert again.steps[0].thickness == alone.steps[0].thickness and again.steps[0].removed_volume == alone.steps[0].removed_volume
+    assert len(cache) == 1
+    polish(TWO_STEPS, overrides=COARSE, cache=cache)
+    assert len(cache) == 2  # the cache holds the last call's solves only

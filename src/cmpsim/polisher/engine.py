@@ -208,7 +208,7 @@ class PolishResult:
     """A polished recipe: ``steps`` (:class:`StepResult`), the ``films`` (name, material, incoming
     thickness in m), the initial ``stack`` and the ``final`` one, the ``target`` (m or None), the
     ``pad_state`` after the last step (:class:`PadState`, for the next wafer), ``solves`` (wafer
-    equilibria solved) and ``wall_time`` (s)."""
+    equilibria solved by this call) and ``wall_time`` (s)."""
 
     recipe: Recipe
     steps: list
@@ -279,7 +279,7 @@ def idle(pad_state: PadState, seconds: float, config: Config) -> PadState:
 
 
 def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None = None, time_step: float = TIME_STEP,
-           rate_factor: float = 1.0, incoming=None, pad_life: PadLife | None = None, die=None) -> PolishResult:
+           rate_factor: float = 1.0, incoming=None, pad_life: PadLife | None = None, die=None, cache: dict | None = None) -> PolishResult:
     """Polish a recipe through time (``cmpsim polish``).
 
     Parameters
@@ -304,6 +304,9 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         A layout riding along (docs/polisher.md, "A layout riding along"): the die model at a few
         wafer sites, each step polishing it at its site's blanket rate for the step's duration;
         every step's ``die`` and ``PolishResult.ride`` (the die at each site after the last step).
+    cache : dict, optional
+        The step solves of an earlier call (a lot passes one dict from wafer to wafer): a step whose
+        configuration was solved there is not solved again. Afterwards it holds this call's solves only.
 
     Returns
     -------
@@ -331,7 +334,8 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
 
         die = RidingDie(die)
     ride = die.prepare(recipe, configs) if die is not None else None  # the layout read and the sites checked before any solve
-    solves: dict = {}
+    solves: dict = cache if cache is not None else {}
+    used, solved = set(), 0
     columns: dict = {}
     pad = pad_state or PadState()
     stack = None
@@ -348,6 +352,8 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
         key = _config_key(cfg)
         if key not in solves:
             solves[key] = StepSolve(cfg)
+            solved += 1
+        used.add(key)
         sol = solves[key]
         if stack is None:
             stack = _initial_stack(recipe, sol, incoming)
@@ -364,7 +370,9 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
             result.die = ride.step(step_cfg, sol.radius, result)
         pad = PadState(thermal, life if pad_life is not None else pad.life, pad.time + result.duration)
         results.append(result)
-    return PolishResult(recipe, results, initial, stack, pad, len(solves), _time.perf_counter() - t0, float(time_step), ride)
+    for key in [k for k in solves if k not in used]:  # a cache carries the last call's solves, no more
+        del solves[key]
+    return PolishResult(recipe, results, initial, stack, pad, solved, _time.perf_counter() - t0, float(time_step), ride)
 
 
 def _initial_stack(recipe: Recipe, sol: StepSolve, incoming) -> FilmStack:

@@ -248,14 +248,15 @@ def run_lot(
     # the wafer's radii and the controller's first rate: the monitor wafers on the lot's pad (or the
     # model's rate on a fresh pad), polished with the recipe as written at the nominal films
     pad_state = PadState(life=PadLifeState())
+    cache: dict = {}  # the step solves of the last wafer: a wafer with the same inputs is not solved again
     if qualification:
         solves = 0
         for _ in range(qualification):
-            first = polish(recipe, overrides=overrides, time_step=time_step, pad_state=pad_state, pad_life=life_model)
+            first = polish(recipe, overrides=overrides, time_step=time_step, pad_state=pad_state, pad_life=life_model, cache=cache)
             solves += first.solves
             pad_state = between_wafers(first)
     else:
-        first = polish(recipe, overrides=overrides, time_step=time_step)
+        first = polish(recipe, overrides=overrides, time_step=time_step, cache=cache)
         solves = first.solves
     first_time = sum(s.duration for s in first.steps)
     first_removed = first.initial.mean_thickness(0) - first.final.mean_thickness(0)
@@ -308,7 +309,7 @@ def run_lot(
             if zoned:
                 ov["zone_pressures"] = state.zone_pressures
         result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
-                        pad_life=life_model)
+                        pad_life=life_model, cache=cache)
         solves += result.solves
         total_time = sum(s.duration for s in result.steps)
         final = np.asarray(result.final.thickness[0], dtype=float)
