@@ -93,6 +93,14 @@ class _Canvas:
             return
         rr, cc = nz
         va, vl = area[nz], length[nz]
+        flat_a, flat_l = self.area.reshape(-1), self.length.reshape(-1)
+        if len(col0) == 1:  # one placement: every window once, plain fancy indexing adds
+            rows, cols = row0[0] + rr, col0[0] + cc
+            ok = (rows >= 0) & (rows < g.ny) & (cols >= 0) & (cols < g.nx)
+            idx = rows[ok] * g.nx + cols[ok]
+            flat_a[idx] += va[ok]
+            flat_l[idx] += vl[ok]
+            return
         chunk = max(1, 4_000_000 // max(len(rr), 1))
         for s in range(0, len(col0), chunk):
             rows = (row0[s:s + chunk, None] + rr[None, :]).ravel()
@@ -100,8 +108,8 @@ class _Canvas:
             n = len(col0[s:s + chunk])
             ok = (rows >= 0) & (rows < g.ny) & (cols >= 0) & (cols < g.nx)
             idx = rows[ok] * g.nx + cols[ok]
-            self.area.ravel()[:] += np.bincount(idx, weights=np.tile(va, n)[ok], minlength=g.nx * g.ny)
-            self.length.ravel()[:] += np.bincount(idx, weights=np.tile(vl, n)[ok], minlength=g.nx * g.ny)
+            np.add.at(flat_a, idx, np.tile(va, n)[ok])
+            np.add.at(flat_l, idx, np.tile(vl, n)[ok])
 
 
 def _single_offset(block: Block, m, t, grid: WindowGrid, canvas: _Canvas) -> None:
