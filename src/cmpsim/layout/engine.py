@@ -119,10 +119,11 @@ def _single_offset(block: Block, m, t, grid: WindowGrid, canvas: _Canvas) -> Non
     # the die's window lattice seen from the block's frame: origin inv (o - t) + w Z^2
     bx, by = _apply(inv, grid.ox - int(t[0, 0]), grid.oy - int(t[0, 1]))
     box = block.box
-    ox = bx - math.ceil((bx - box.left) / w) * w
-    oy = by - math.ceil((by - box.bottom) / w) * w
-    nx = max(math.ceil((box.right - ox) / w), 1)
-    ny = max(math.ceil((box.top - oy) / w), 1)
+    # one window to spare on each side: an edge on the block's first grid line sends half its length there
+    ox = bx - (math.ceil((bx - box.left) / w) + 1) * w
+    oy = by - (math.ceil((by - box.bottom) / w) + 1) * w
+    nx = max(math.ceil((box.right - ox) / w), 1) + 1
+    ny = max(math.ceil((box.top - oy) / w), 1) + 1
     area, length = grid_rasters(block.region, (ox, oy), w, nx, ny)
     # block window (i, j) -> its centre in the die's frame -> the die's window there (first placement)
     ci = ox + (np.arange(nx) + 0.5) * w

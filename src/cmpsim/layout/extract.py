@@ -82,15 +82,19 @@ MAX_WINDOWS = 25_000_000
 def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]:
     """The (layer, datatype) pairs of the specs that the die has; ValueError naming a spec it lacks."""
     groups = resolve_layers(layers, pdk=pdk, layer_map=layer_map)
+    in_file = layers_in(layout)
     present = layers_in(layout, cell)
-    listing = ", ".join(f"{l}/{d}" for l, d in sorted(present))
+    listing = ", ".join(f"{l}/{d}" for l, d in sorted(in_file))
     pairs: set[tuple[int, int]] = set()
     for spec, group in zip([layers] if isinstance(layers, (str, tuple)) else layers, groups):
         have = [p for p in group if p in present]
         if not have:
             want = ", ".join(f"{l}/{d}" for l, d in group)
-            raise ValueError(f"layer {spec!r} ({want}) is not in {layout.name} under top cell {cell.name!r}; "
-                             f"its layers are: {listing}")
+            if any(p in in_file for p in group):
+                here = ", ".join(f"{l}/{d}" for l, d in sorted(present))
+                raise ValueError(f"layers {want} have no shapes under top cell {cell.name!r} (an empty layer: they are drawn "
+                                 f"only under other top cells of {layout.name}); the die's layers are: {here}")
+            raise ValueError(f"layer {spec!r} ({want}) is not in {layout.name}; its layers are: {listing}")
         pairs.update(have)
     return pairs
 
