@@ -150,7 +150,8 @@ def _windows(layout: Layout, cell, pairs, grid: WindowGrid, box, threads, big, p
     area_m = np.clip(area, 0.0, full) * dbu * dbu
     length_m = np.maximum(length, 0.0) * dbu
     window_m = w * dbu
-    density, width, space = window_fields(area_m, length_m, window_m)
+    _, width, space = window_fields(area_m, length_m, window_m)
+    density = np.clip(area, 0.0, full) / full  # in dbu^2: a full window is exactly 1
     bx0, by0, bx1, by1 = box
     return LayoutWindows(
         x=(grid.ox + (np.arange(grid.nx) + 0.5) * w) * dbu,

@@ -102,7 +102,8 @@ def read_layout(path: str | os.PathLike) -> Layout:
             raise LayoutTooLarge(f"layout path {str(p)!r} does not fit in this machine's memory ({msg.strip()}); "
                                  "cut the region of interest out of it or use a larger machine") from None
         raise ValueError(f"layout path {str(p)!r} could not be read as a layout ({msg.strip()}): {_WHAT}") from None
-    return Layout(db=db, path=p, format=fmt, dbu=float(db.dbu) * 1e-6)
+    # KLayout keeps the unit in micrometres (0.001): read as a decimal, 1e-9 m stays exactly 1e-9
+    return Layout(db=db, path=p, format=fmt, dbu=float(f"{db.dbu!r}e-6"))
 
 
 def top_cell(layout: Layout, top: str | None = None) -> kdb.Cell:
