@@ -445,6 +445,9 @@ class Config:
         """
         flat: dict[str, Any] = {}
         data = dict(data)
+        calibration = data.pop("calibration", None)  # a process file's record of its calibration: metadata, not inputs
+        if calibration is not None and not isinstance(calibration, dict):
+            raise ValueError(f"calibration must be the [calibration] table of a process file (cmpsim calibrate); got {calibration!r}")
         if "preset" in data:
             base = cls.preset(str(data.pop("preset")))
         for key, value in data.items():
