@@ -22,7 +22,7 @@ from .film import chemistry_sensitivities
 from .identify import choose
 from .registry import FILM_REMOVAL, _film_candidates
 
-__all__ = ["SeriesLOO", "series_loo", "linear_fit"]
+__all__ = ["SeriesLOO", "series_loo", "linear_fit", "compare_with_preston"]
 
 
 @dataclass
@@ -104,3 +104,18 @@ def series_loo(dataset, results, config, values_si=None) -> SeriesLOO | None:
         model = to_unit(_loo(np.asarray(values_si, dtype=float), y, w))
     return SeriesLOO(dataset.name, unit, len(pts), to_unit(err), to_unit(_loo(pu, y, w)), to_unit(_loo(None, y, w)), model,
                      whole.names, [from_si(e, unit, pts[0].quantity) - from_si(0.0, unit, pts[0].quantity) if math.isfinite(e) else float("nan") for e in err])
+
+
+def compare_with_preston(report) -> list[SeriesLOO]:
+    """The leave-one-out comparison of every removal series of a validation report
+    (:func:`cmpsim.validate`), stored in ``report.calibrated_loo`` and returned: the calibrated model
+    (the film chemistry refitted without each point) beside Preston's law and the mean."""
+    out = []
+    for ds, values, results in report.solved.values():
+        if ds.kind != "measurement":
+            continue
+        one = series_loo(ds, results, report.config, values)
+        if one is not None:
+            out.append(one)
+    report.calibrated_loo = out
+    return out
