@@ -275,3 +275,13 @@ def test_the_calibrated_model_beats_preston_on_the_platinum_series_only(loo):
 @pytest.mark.xfail(strict=True, reason="issue 38 wants two thirds of the shipped removal series; measured 1 of 5 (docs/calibrate.md)")
 def test_the_calibrated_model_beats_preston_on_two_thirds_of_the_shipped_series(loo):
     assert sum(s.beats_preston for s in loo) >= 2 / 3 * len(loo)
+
+
+def test_cli_calibrate_without_free_prints_the_choice_and_writes_the_process_file(tmp_path):
+    out = tmp_path / "calibrated.toml"
+    res = CliRunner().invoke(main, ["calibrate", str(TUGBAWA), "--quiet", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "inputs chosen by the data" in res.output and "fit chemistry_rate_copper" in res.output and "LOO Preston" in res.output
+    assert "[calibration]" in out.read_text()
+    run = CliRunner().invoke(main, ["run", "--config", str(out), "--grid", "coarse", "--set", "film=copper"])
+    assert run.exit_code == 0, run.output

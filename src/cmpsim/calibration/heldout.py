@@ -59,7 +59,7 @@ def linear_fit(X: np.ndarray, y: np.ndarray, w: np.ndarray, low: np.ndarray) -> 
 
 
 def _choose(X, w, names, whys, max_free):
-    """:func:`choose` on the weighted columns as directions (each scaled to unit norm: the derivatives
+    """``choose`` on the weighted columns as directions (each scaled to unit norm: the derivatives
     of a rate in k, B and R_c differ by orders of magnitude, and only their directions matter here)."""
     A = X * np.sqrt(w)[:, None]
     norms = np.linalg.norm(A, axis=0)
@@ -69,7 +69,7 @@ def _choose(X, w, names, whys, max_free):
 def series_loo(dataset, results, config, values_si=None) -> SeriesLOO | None:
     """The leave-one-out errors of a removal series (None if it is not one, or a point has no equilibrium).
 
-    ``results`` are the solved points of ``dataset`` (:func:`cmpsim.validation.solve_points`) under
+    ``results`` are the solved points of ``dataset`` (``cmpsim.validation.solve_points``) under
     ``config``; ``values_si`` their model values (SI) for the scale-only model of a shape series.
     """
     pts = dataset.points
@@ -108,7 +108,7 @@ def series_loo(dataset, results, config, values_si=None) -> SeriesLOO | None:
 
 def compare_with_preston(report) -> list[SeriesLOO]:
     """The leave-one-out comparison of every removal series of a validation report
-    (:func:`cmpsim.validate`), stored in ``report.calibrated_loo`` and returned: the calibrated model
+    (``cmpsim.validate``), stored in ``report.calibrated_loo`` and returned: the calibrated model
     (the film chemistry refitted without each point) beside Preston's law and the mean."""
     out = []
     for ds, values, results in report.solved.values():

@@ -3,7 +3,7 @@
 Every command's ``--config`` takes it as a configuration (the ``[calibration]`` table is read as
 metadata, :meth:`cmpsim.inputs.config.Config.from_mapping`). ``cmpsim polish`` and ``cmpsim lot`` run
 a recipe on its own tool and take from it only the constants the table lists
-(:func:`cmpsim.inputs.processfile.process_constants`). The table::
+(``cmpsim.inputs.processfile.process_constants``). The table::
 
     [calibration]
     constants = ["mechanical_factor_copper", ...]   # the fitted inputs

@@ -37,7 +37,7 @@ def load_config(config_path, assignments, preset: str | None = None, grid: str |
 
 def recipe_overrides(config_path, assignments) -> dict:
     """The inputs for every step of a recipe (``cmpsim polish``, ``cmpsim lot``): the constants of
-    ``--config`` (:func:`cmpsim.inputs.processfile.process_constants`: a process file's fitted constants),
+    ``--config`` (``cmpsim.inputs.processfile.process_constants``: a process file's fitted constants),
     then ``--set`` (raises ValueError)."""
     from ..inputs.processfile import process_constants
 

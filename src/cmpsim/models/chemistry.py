@@ -1,10 +1,10 @@
 """Film chemistry (``film_chemistry``): what the slurry's chemistry adds to the mechanical removal rate.
 
-Each model wraps the mechanical removal law of :mod:`cmpsim.models.removal_laws` (:meth:`wrap`):
+Each model wraps the mechanical removal law of :mod:`cmpsim.models.removal_laws` (``wrap``):
 
 * ``"none"`` (:class:`NoChemistry`, the default): the mechanical law itself, unchanged, so an
   uncalibrated configuration gives the rates it always gave, bit for bit;
-* ``"additive"`` (:class:`AdditiveChemistry`): eq. 13h.2 of :mod:`cmpsim.physics.chemistry`,
+* ``"additive"`` (:class:`AdditiveChemistry`): eq. 13h.2 of ``cmpsim.physics.chemistry``,
   RR = k_F RR_m + B_F |du| + R_c,F with the constants of the film being polished (``film``).
 
 A new chemistry adds a class here and an entry in the registry of :mod:`cmpsim.models`.
