@@ -119,10 +119,6 @@ def test_every_existing_shipped_file_still_reads():
 def test_profiles_removal_and_thickness_are_read_at_a_radius_and_a_time(tmp_path):
     p = _write(
         tmp_path,
-        "dataset,quantity,value,unit,film,radius,x,y,time,initial_thickness\n",
-    )
-    p = _write(
-        tmp_path,
         "dataset,quantity,value,unit,film,x,y,time,initial_thickness\n"
         "prof,removal_rate,100,nm/min,copper,0 mm,0 mm,,\n"
         "prof,removal_rate,100,nm/min,copper,20 mm,20 mm,,\n"

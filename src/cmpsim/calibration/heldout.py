@@ -85,7 +85,7 @@ def series_loo(dataset, results, config, values_si=None) -> SeriesLOO | None:
     names, whys = [c.name for c in cands], [c.why for c in cands]
     sens = [chemistry_sensitivities(r, p.film, p.where, p.quantity) for p, r in zip(pts, results)]
     X = np.array([[s.get(n, 0.0) for n in names] for s in sens])
-    fixed = np.array([[getattr(r.config.replace(film_chemistry="additive") if r.config.film_chemistry == "none" else r.config, n) for n in names] for r in results])
+    fixed = np.array([[getattr(r.config, n) for n in names] for r in results])
     base = np.sum(X * fixed, axis=1)  # the model with the constants it has (the uncalibrated: the mechanical rate)
     low = np.array([0.0 for _ in names])
     err = np.full(len(pts), np.nan)
@@ -98,12 +98,16 @@ def series_loo(dataset, results, config, values_si=None) -> SeriesLOO | None:
         err[i] = offset[i] + X[i, cols] @ theta - y[i]
     whole = _choose(X, w, names, whys, len(pts) - 1)
     pu = np.array([r.config.applied_pressure * r.scalars["sliding_speed"] for r in results])
-    to_unit = lambda e: _rms([from_si(abs(v), unit, pts[0].quantity) - from_si(0.0, unit, pts[0].quantity) for v in e])  # noqa: E731
-    model = None
-    if dataset.comparison == "shape" and values_si is not None:
-        model = to_unit(_loo(np.asarray(values_si, dtype=float), y, w))
-    return SeriesLOO(dataset.name, unit, len(pts), to_unit(err), to_unit(_loo(pu, y, w)), to_unit(_loo(None, y, w)), model,
-                     whole.names, [from_si(e, unit, pts[0].quantity) - from_si(0.0, unit, pts[0].quantity) if math.isfinite(e) else float("nan") for e in err])
+    q = pts[0].quantity
+
+    def in_unit(e: float) -> float:  # an error (a difference, SI) in the series' unit
+        return from_si(e, unit, q) - from_si(0.0, unit, q) if math.isfinite(e) else float("nan")
+
+    def rms(errors) -> float:
+        return _rms([in_unit(e) for e in errors])
+
+    model = rms(_loo(np.asarray(values_si, dtype=float), y, w)) if dataset.comparison == "shape" and values_si is not None else None
+    return SeriesLOO(dataset.name, unit, len(pts), rms(err), rms(_loo(pu, y, w)), rms(_loo(None, y, w)), model, whole.names, [in_unit(e) for e in err])
 
 
 def compare_with_preston(report) -> list[SeriesLOO]:
