@@ -67,6 +67,7 @@ _PAD_START = {"summit_radius": "asperity_radius", "feature_modulus": "pad_bulk_m
 
 @dataclass(frozen=True)
 class TestStructure:
+    __test__ = False  # not a pytest class
     """A square block of lines (width, space; space None: an isolated line) of side ``size`` (None: larger than L), m."""
 
     line_width: float
@@ -185,7 +186,7 @@ def predict_die(records, constants: dict | None = None, config=None, blanket_rat
         lay = Layout(np.array([[s.density for s in st]]), 50e-6, np.array([[s.line_width for s in st]]), "structures",
                      np.array([[s.space for s in st]]))
         eff = np.array([[s.site_effective_density(L) for s in st]])
-        fc = FeatureContact(float(pressure), fc0.modulus, fc0.poisson, fc0.thickness, fc0.compliance)
+        fc = _CachedFeature(FeatureContact(float(pressure), fc0.modulus, fc0.poisson, fc0.thickness, fc0.compliance))
 
         def fresh():
             return DieEvolution(lay, process, eff, float(rate), cfg.asperity_radius, fc)
@@ -209,6 +210,31 @@ def predict_die(records, constants: dict | None = None, config=None, blanket_rat
                 out[idx[j]] = field[records[idx[j]].quantity][0, j]
         del n
     return out
+
+
+class _CachedFeature:
+    """A :class:`cmpsim.die.reach.FeatureContact` whose G(b, lambda) is computed once per set of gaps and pitches.
+
+    G depends on the structures and the top pad only, not on any fitted constant (the modulus
+    scales it, :class:`cmpsim.die.evolution.DieEvolution`), so a fit pays for it once.
+    """
+
+    _G: dict = {}
+
+    def __init__(self, feature):
+        self.feature = feature
+        self.modulus = feature.modulus
+        self.pressure = feature.pressure
+
+    def bulge(self, gap, pitch, up_fraction):
+        f = self.feature
+        key = (np.asarray(gap, dtype=float).tobytes(), np.asarray(pitch, dtype=float).tobytes(), f.modulus, f.poisson, f.thickness)
+        if key not in self._G:
+            if len(self._G) > 256:
+                self._G.clear()
+            self._G[key] = f.compliance_difference(gap, pitch)
+        g = self._G[key]
+        return np.where(np.isfinite(g), f.pressure * np.nan_to_num(g) / np.asarray(up_fraction, dtype=float), 0.0)
 
 
 _RATE_CACHE: dict = {}
