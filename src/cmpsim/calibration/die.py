@@ -67,8 +67,9 @@ _PAD_START = {"summit_radius": "asperity_radius", "feature_modulus": "pad_bulk_m
 
 @dataclass(frozen=True)
 class TestStructure:
-    __test__ = False  # not a pytest class
     """A square block of lines (width, space; space None: an isolated line) of side ``size`` (None: larger than L), m."""
+
+    __test__ = False  # not a pytest class
 
     line_width: float
     line_space: float | None = None
