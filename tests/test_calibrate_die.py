@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from cmpsim.calibration.die import DieCalibration, TestStructure, calibrate_die, heldout_comparison, predict_die
+from cmpsim.calibration.die import TestStructure, calibrate_die, heldout_comparison, predict_die
 from cmpsim.calibration.measurements import MeasurementError, StructureRecord, read_measurements, shipped_measurement_paths
 from cmpsim.die import simulate
 from cmpsim.die.density import GaussianWeighting, effective_density

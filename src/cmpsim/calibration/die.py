@@ -183,7 +183,6 @@ def predict_die(records, constants: dict | None = None, config=None, blanket_rat
     for (kind, inputs, rate, pressure), idx in groups.items():
         process = DieProcess(kind=kind, **dict(inputs), **consts)
         st = [_structure(records[i]) for i in idx]
-        n = len(st)
         lay = Layout(np.array([[s.density for s in st]]), 50e-6, np.array([[s.line_width for s in st]]), "structures",
                      np.array([[s.space for s in st]]))
         eff = np.array([[s.site_effective_density(L) for s in st]])
@@ -209,7 +208,6 @@ def predict_die(records, constants: dict | None = None, config=None, blanket_rat
             field = {"dishing": ev.dishing, "erosion": ev.erosion, "step_height": ev.step_height}
             for j in sel:
                 out[idx[j]] = field[records[idx[j]].quantity][0, j]
-        del n
     return out
 
 
