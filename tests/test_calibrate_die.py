@@ -231,3 +231,17 @@ def test_linearisation_agrees_with_a_sample_of_the_covariance(calibrated_run):
     sd_sample = float(np.std(vals))
     sd_lin = (h["interval"][1] - h["interval"][0]) / (2 * 1.96)
     assert sd_lin == pytest.approx(sd_sample, rel=0.2)
+
+
+def test_a_die_model_of_a_real_layout_carries_the_uncertainty(calibrated_run):
+    """DieModel (the path of `cmpsim die CHIP.gds`) gives the same hotspots with their intervals as simulate."""
+    from cmpsim.die import builtin_layout
+    from cmpsim.die.chip import DieModel
+
+    _, unc, run = calibrated_run
+    model = DieModel(process="copper", blanket_rate=15.9e-9, spec={"dishing": "100 nm"}, uncertainty=unc)
+    r = model.run(builtin_layout("lines", 200e-6), time=run.time)
+    hot, ref = r.hotspots(), run.hotspots()
+    assert len(hot) == len(ref) > 0
+    assert hot[0]["interval"] == pytest.approx(ref[0]["interval"], rel=1e-9)
+    assert hot[0]["probability"] == pytest.approx(ref[0]["probability"], abs=1e-12)

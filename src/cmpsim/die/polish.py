@@ -443,14 +443,7 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
     from .hotspots import parse_spec
 
     spec = parse_spec(spec)
-    if uncertainty is not None:  # the run uses the fitted constants
-        fitted = dict(zip(uncertainty.names, uncertainty.values))
-        if "planarization_length" in fitted:
-            planarization_length = fitted.pop("planarization_length")
-        if isinstance(process, DieProcess):
-            process = process.replace(**fitted)
-        else:
-            process_values = {**process_values, **fitted}
+    process, planarization_length, process_values = _fitted(uncertainty, process, planarization_length, process_values)
     config, layout, process, w, derived, eff, fc = _prepare(layout, config, process, planarization_length, weighting, cell_size,
                                                             feature_contact, **process_values)
     if blanket_rate is None:
@@ -462,23 +455,42 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
     result = _polish(layout, process, config, float(blanket_rate), time, eff, fc, incoming,
                      DieResult(layout, process, 0.0, float(blanket_rate), w.length, derived, weighting, eff, None, _conventions(config),
                                feature_contact, spec))
+    return _with_sigma(result, config, fc, incoming, uncertainty)
+
+
+def _fitted(uncertainty, process, planarization_length, process_values):
+    """(process, planarization length, process keywords) with a calibration's fitted constants over them."""
+    if uncertainty is None:
+        return process, planarization_length, process_values
+    fitted = dict(zip(uncertainty.names, uncertainty.values))
+    if "planarization_length" in fitted:
+        planarization_length = fitted.pop("planarization_length")
+    if isinstance(process, DieProcess):
+        return process.replace(**fitted), planarization_length, process_values
+    return process, planarization_length, {**process_values, **fitted}
+
+
+def _with_sigma(result: DieResult, config, fc, incoming, uncertainty) -> DieResult:
+    """``result`` with the standard deviation of every field with a limit (:func:`cmpsim.die.uncertainty.window_sigma`), or as it is."""
     if uncertainty is None:
         return result
     from dataclasses import replace as _replace
 
     from .uncertainty import window_sigma
 
+    layout, weighting = result.layout, result.weighting
+    if weighting == "pad" and "planarization_length" in uncertainty.names:
+        raise ValueError("weighting = 'pad' takes its length from the pad stack: a calibrated planarization_length needs 'gaussian' or 'elliptic'")
+
     def evaluate(values: dict) -> dict:
         values = dict(values)
         length = values.pop("planarization_length", result.planarization_length)
         wt, _ = _weighting(config, None if weighting == "pad" else length, weighting)
         e = effective_density(layout.density, layout.cell_size, wt)
-        ev = DieEvolution(layout, process.replace(**values), e, result.blanket_rate, config.asperity_radius, fc, incoming)
+        ev = DieEvolution(layout, result.process.replace(**values), e, result.blanket_rate, config.asperity_radius, fc, incoming)
         ev.advance_to(result.time)
         return {"thickness": ev.thickness, "step_height": ev.step_height, "dishing": ev.dishing, "erosion": ev.erosion}
 
-    if weighting == "pad" and "planarization_length" in uncertainty.names:
-        raise ValueError("weighting = 'pad' takes its length from the pad stack: a calibrated planarization_length needs 'gaussian' or 'elliptic'")
     return _replace(result, uncertainty=uncertainty, sigma=window_sigma(evaluate, uncertainty))
 
 
