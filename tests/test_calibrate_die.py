@@ -245,3 +245,13 @@ def test_a_die_model_of_a_real_layout_carries_the_uncertainty(calibrated_run):
     assert len(hot) == len(ref) > 0
     assert hot[0]["interval"] == pytest.approx(ref[0]["interval"], rel=1e-9)
     assert hot[0]["probability"] == pytest.approx(ref[0]["probability"], abs=1e-12)
+
+
+def test_die_uncertainty_round_trips_and_refuses_bad_input():
+    u = DieUncertainty(("contact_height", "planarization_length"), (80e-9, 3e-3), np.diag([0.01, 0.04]))
+    v = DieUncertainty.from_dict(u.to_dict())
+    assert v.names == u.names and v.values == u.values and np.array_equal(v.covariance, u.covariance)
+    with pytest.raises(ValueError, match="unknown die constant 'colour'"):
+        DieUncertainty(("colour",), (1.0,), np.eye(1))
+    with pytest.raises(ValueError, match="positive semi-definite"):
+        DieUncertainty(("contact_height",), (1e-7,), -np.eye(1))
