@@ -444,6 +444,7 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
     kinds = {r.process for r in records}
     if len(kinds) > 1:
         raise ValueError(f"one process per calibration; the records hold {sorted(kinds)}")
+    auto = free is None
     if free is None:
         free, reasons = choose_free(records)
     else:
@@ -509,6 +510,10 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
         ci[n] = (vals[n] * math.exp(-w), vals[n] * math.exp(w)) if np.isfinite(w) and w < 700 else (0.0, math.inf)
         stderr[n] = vals[n] * se[k]
     notes += _identifiability(free, J, se, corr, vals, lo, hi)
+    if auto:
+        held = [n for n in DIE_CONSTANTS if n not in free and n not in fixed and n not in {k for r in records for k in r.inputs}]
+        if held:
+            notes.append(f"held at their start values (these quantities do not identify them): {', '.join(held)}")
     m1 = predict_die(records, {**fixed, **vals}, config)
     return DieCalibration(list(free), vals, {n: float(s0[n]) for n in free}, stderr, ci, corr, cov, records, y, m0, m1, chi2, dof,
                           absolute, reasons, notes, fixed, config, bool(fit.success), nfev[0])
