@@ -80,15 +80,19 @@ class DieModel:
 
     ``process`` is a :class:`DieProcess` or ``"oxide"``/``"copper"`` (keywords set its inputs with
     units); ``blanket_rate`` (m/s) defaults to the wafer-mean rate of ``cmpsim.solve(config)`` for the
-    process's film (solved once, at construction); ``spec`` the hotspot limits. Other arguments
-    as :func:`cmpsim.die.simulate`.
+    process's film (solved once, at construction); ``spec`` the hotspot limits; ``uncertainty`` a
+    calibration's covariance (every :meth:`run` then gives its hotspots ``interval`` and
+    ``probability``, :mod:`cmpsim.die.uncertainty`). Other arguments as :func:`cmpsim.die.simulate`.
     """
 
     def __init__(self, config=None, process="oxide", *, blanket_rate: float | None = None, planarization_length: float | None = None,
-                 weighting: str = "gaussian", feature_contact: str = "elastic", spec=None, **process_values):
+                 weighting: str = "gaussian", feature_contact: str = "elastic", spec=None, uncertainty=None, **process_values):
         from .hotspots import parse_spec
+        from .polish import _fitted
 
         config = _config(config)
+        process, planarization_length, process_values = _fitted(uncertainty, process, planarization_length, process_values)
+        self.uncertainty = uncertainty  # a calibration's covariance: hotspots with interval and probability (cmpsim.die.uncertainty)
         if process is None or isinstance(process, str):
             process = DieProcess.from_values(process or "oxide", **process_values)
         elif process_values:
@@ -132,7 +136,10 @@ class DieModel:
         eff = effective_density(lay.density, lay.cell_size, self.weight)
         template = DieResult(lay, self.process, 0.0, self.blanket_rate, self.weight.length, self.derived, self.weighting, eff, None,
                              self.conventions, self.feature_contact, dict(self.spec), level)
-        return _polish(lay, self.process, self.config, self.blanket_rate, time, eff, self.feature, incoming, template)
+        from .polish import _with_sigma
+
+        result = _polish(lay, self.process, self.config, self.blanket_rate, time, eff, self.feature, incoming, template)
+        return _with_sigma(result, self.config, self.feature, incoming, self.uncertainty)
 
     # a die through the steps of a recipe: start once, then resume step after step (cmpsim.polisher.ride)
     def _effective(self, lay):
