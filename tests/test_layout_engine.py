@@ -284,3 +284,24 @@ def test_several_top_cells_cli_names_top(tmp_path):
     r = CliRunner().invoke(main, ["die", str(path), "--layer", "68/20", "--blanket-rate", "100nm/min", "--out", str(out)])
     assert r.exit_code == 2 and "--top" in r.output and "['SPARE', 'TOP']" in r.output
     assert not out.exists()
+
+
+def test_a_cell_placed_twice_on_the_same_spot_counts_once(tmp_path):
+    """Real tape-outs place a cell twice at one spot (an SG13G2 test chip does, on Metal3): KLayout's deep
+    merge keeps both copies of the merged polygons, one per placement; the engine merges them once more."""
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+    sub = lib.new_cell("SUB")
+    sub.add(gdstk.rectangle((0, 0), (6, 2), layer=30, datatype=0))
+    mid = lib.new_cell("MID")
+    mid.add(gdstk.Reference(sub, (5, 5)))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.Reference(mid, (0, 0)))
+    top.add(gdstk.Reference(mid, (0, 0)))  # the duplicate
+    top.add(gdstk.Reference(sub, (5, 5)))  # and the same shapes once more, through another path
+    top.add(gdstk.rectangle((0, 0), (40, 40), layer=1, datatype=0))
+    path = tmp_path / "dup.gds"
+    lib.write_gds(str(path))
+    for big in (0, None, 10**9):
+        res = extract_windows(path, "30/0", 20 * UM, big=big)
+        assert res.density.sum() * (res.window / UM) ** 2 == pytest.approx(12.0, rel=1e-12)
+        assert res.boundary.sum() / UM == pytest.approx(16.0, rel=1e-12)

@@ -34,10 +34,11 @@ __all__ = ["Block", "merged_region", "edges_to_segments", "grid_rasters", "borde
 
 def merged_region(cell: kdb.Cell, layer_indexes, store: kdb.DeepShapeStore | None = None, *,
                   excluded=(), box: kdb.Box | None = None) -> kdb.Region:
-    """The merged shapes of ``cell`` on the layers (dbu, cell frame).
+    """The merged shapes of ``cell`` on the layers (dbu, cell frame), a flat region.
 
-    ``store`` makes it a deep (hierarchical) region; ``excluded`` are cell indexes whose
-    subtrees are left out; ``box`` restricts the shapes to those touching it (whole shapes).
+    ``store`` merges them in KLayout's deep (hierarchical) mode first; ``excluded`` are cell
+    indexes whose subtrees are left out; ``box`` restricts the shapes to those touching it
+    (whole shapes).
     """
     region = None
     for li in layer_indexes:
@@ -49,7 +50,16 @@ def merged_region(cell: kdb.Cell, layer_indexes, store: kdb.DeepShapeStore | Non
     if region is None:
         return kdb.Region()
     region.merge()
-    return region
+    if store is None:
+        return region
+    # A deep merge is merged cell by cell: two identical placements of one cell at one spot (real
+    # tape-outs have them) stay two copies of the same merged polygons when flattened, and would be
+    # counted twice. The merged pieces are copied flat and merged once more (cheap: they are few and
+    # already merged), so the region is the flat merge KLayout gives, whatever the hierarchy.
+    flat = kdb.Region()
+    flat.insert(region)
+    flat.merge()
+    return flat
 
 
 def edges_to_segments(edges: kdb.Edges) -> Segments:
@@ -67,8 +77,7 @@ def edges_to_segments(edges: kdb.Edges) -> Segments:
 
 
 def _ortho_and_oblique(edges: kdb.Edges) -> tuple[kdb.Edges, kdb.Edges]:
-    ortho = edges.with_angle(kdb.Edges.OrthoEdges, False)
-    oblique = edges.with_angle(kdb.Edges.OrthoEdges, True)
+    ortho, oblique = edges.split_with_angle(kdb.Edges.OrthoEdges)
     return ortho, oblique
 
 
