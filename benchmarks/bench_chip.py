@@ -78,7 +78,7 @@ def step(macro: Path, size_mm: float, out: Path) -> tuple[int, int, int]:
     chip.insert(kdb.CellInstArray(cell.cell_index(), kdb.Trans(-bb.left, -bb.bottom),
                                   kdb.Vector(bb.width(), 0), kdb.Vector(0, bb.height()), nx, ny))
     ly.write(str(out))
-    return nx, ny, len(list(cell.each_inst())) * nx * ny
+    return nx, ny, sum(inst.size() for inst in cell.each_inst()) * nx * ny
 
 
 def main() -> int:

@@ -92,9 +92,9 @@ def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]
             want = ", ".join(f"{l}/{d}" for l, d in group)
             if any(p in in_file for p in group):
                 here = ", ".join(f"{l}/{d}" for l, d in sorted(present))
-                raise ValueError(f"layers {want} have no shapes under top cell {cell.name!r} (an empty layer: they are drawn "
+                raise ValueError(f"--layer {spec!r}: layers {want} have no shapes under top cell {cell.name!r} (an empty layer: they are drawn "
                                  f"only under other top cells of {layout.name}); the die's layers are: {here}")
-            raise ValueError(f"layer {spec!r} ({want}) is not in {layout.name}; its layers are: {listing}")
+            raise ValueError(f"--layer {spec!r} ({want}) is not in {layout.name}; its layers are: {listing}")
         pairs.update(have)
     return pairs
 

@@ -44,11 +44,11 @@ def die_parameter(message: str) -> str | None:
         return "layout"
     if m.startswith("top cell") or m.startswith("--top") or "top-level cells" in m:
         return "top"
-    if m.startswith("layer"):  # a layer the file lacks, an empty layer, an unknown name
+    if m.startswith("layer") or m.startswith("--layer"):  # a layer the file lacks, an empty layer, an unknown name
         return "layer"
     if m.startswith("pdk"):
         return "pdk"
-    if m.startswith("window"):
+    if m.startswith("window") or m.startswith("--window"):
         return "window"
     if m.startswith("--spec"):
         return "spec"
