@@ -25,29 +25,12 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from cmpsim.cli import main
+from klayout_reference import klayout_flat
 from cmpsim.layout import LayoutTooLarge, extract_levels, extract_windows, read_layout, top_cell
 
 UM = 1e-6
 DATA = Path(__file__).parent / "data"
 REAL = DATA / "sg13g2_FMD_QNC_OTA_TIA.gds.gz"
-
-
-def klayout_flat(path, pairs, res):
-    """(density, boundary in dbu) from KLayout's flat merge of the same file, on the same windows."""
-    ly = kdb.Layout()
-    ly.read(str(path))
-    top = ly.cell(res.top)
-    region = kdb.Region()
-    for l, d in pairs:
-        li = ly.find_layer(l, d)
-        if li is not None:
-            region += kdb.Region(top.begin_shapes_rec(li))
-    region.merge()
-    w = round(res.window / res.dbu)
-    ny, nx = res.density.shape
-    o = kdb.Point(round(res.origin[0] / res.dbu), round(res.origin[1] / res.dbu))
-    area = np.asarray(region.rasterize(o, kdb.Vector(w, w), nx, ny)) / float(w * w)
-    return area, region
 
 
 # ------------------------------------------------------------------------ a randomised hierarchy

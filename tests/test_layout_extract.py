@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from cmpsim.layout import extract_windows, read_layout
+from klayout_reference import klayout_flat
 
 UM = 1e-6
 
@@ -52,21 +53,7 @@ def exact_density(path, layers, res):
 
 def klayout_density(path, layers, res):
     """KLayout's own flat merge of the same file (no hierarchy, no engine of cmpsim's), rasterised on the windows."""
-    import klayout.db as kdb
-
-    ly = kdb.Layout()
-    ly.read(str(path))
-    top = ly.cell(res.top)
-    region = kdb.Region()
-    for l, d in layers:
-        li = ly.find_layer(l, d)
-        if li is not None:
-            region += kdb.Region(top.begin_shapes_rec(li))
-    region.merge()
-    w = round(res.window / res.dbu)
-    ny, nx = res.density.shape
-    o = kdb.Point(round(res.origin[0] / res.dbu), round(res.origin[1] / res.dbu))
-    return np.asarray(region.rasterize(o, kdb.Vector(w, w), nx, ny)) / float(w * w)
+    return klayout_flat(path, layers, res)[0]
 
 
 #: gdstk keeps real-valued vertices where oblique edges cross or a 36.87-degree placement turns a
