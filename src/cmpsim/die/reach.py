@@ -62,13 +62,44 @@ def _g(s):
     return np.log(np.sinc(s / (2.0 * np.pi)))
 
 
+#: Above this many points the smooth integrals below come from cubic splines through 4097 exact values
+#: (round-off: 1e-15 absolute, against 1e-16 for the 48-point quadrature) instead of the quadrature itself:
+#: a whole chip's million windows cost 0.1 s instead of 10 s.
+TABLE_ABOVE = 4096
+_TABLES: dict = {}
+
+
+def _int_g(th):
+    """int_0^theta g(s) ds (48-point Gauss-Legendre; g is smooth on [0, pi])."""
+    s = 0.5 * th[..., None] * (_X + 1.0)
+    return 0.5 * th * np.sum(_W * _g(s), axis=-1)
+
+
+def _int2_g(phi):
+    """int_0^phi (phi - s) g(s) ds (48-point Gauss-Legendre)."""
+    s = 0.5 * phi[..., None] * (_X + 1.0)
+    return 0.5 * phi * np.sum(_W * (phi[..., None] - s) * _g(s), axis=-1)
+
+
+def _smooth(kind: str, x: np.ndarray) -> np.ndarray:
+    """The smooth integral ``kind`` ("g" or "g2") at x in [0, pi]: quadrature, or its spline table for many points."""
+    exact = _int_g if kind == "g" else _int2_g
+    if x.size <= TABLE_ABOVE:
+        return exact(x)
+    if kind not in _TABLES:
+        from scipy.interpolate import CubicSpline
+
+        grid = np.linspace(0.0, np.pi, 4097)
+        _TABLES[kind] = CubicSpline(grid, exact(grid))
+    return _TABLES[kind](x)
+
+
 def clausen2(theta):
     """Cl2(theta) = sum_{n>=1} sin(n theta) / n^2 for theta in [0, pi] (to round-off)."""
     th = np.asarray(theta, dtype=float)
     if np.any((th < 0) | (th > np.pi)):
         raise ValueError("clausen2 takes theta in [0, pi]")
-    s = 0.5 * th[..., None] * (_X + 1.0)
-    integral = 0.5 * th * np.sum(_W * _g(s), axis=-1)
+    integral = _smooth("g", th)
     with np.errstate(divide="ignore", invalid="ignore"):
         out = th - th * np.log(th) - integral
     return np.where(th > 0, out, 0.0)
@@ -80,8 +111,7 @@ def sin2_cubed_sum(theta):
     if np.any((th < 0) | (th > np.pi)):
         raise ValueError("sin2_cubed_sum takes theta in [0, pi]")
     phi = 2.0 * np.minimum(th, np.pi - th)
-    s = 0.5 * phi[..., None] * (_X + 1.0)
-    smooth = 0.5 * phi * np.sum(_W * (phi[..., None] - s) * _g(s), axis=-1)
+    smooth = _smooth("g2", phi)
     with np.errstate(divide="ignore", invalid="ignore"):
         whole = 0.75 * phi**2 - 0.5 * phi**2 * np.log(phi) - smooth
     return 0.5 * np.where(phi > 0, whole, 0.0)
