@@ -100,6 +100,8 @@ def scales_table(cal) -> dict:
         table["ci95"].update({n: [_finite(lo), _finite(hi)] for n, (lo, hi) in cal.pad.ci95.items()})
         table["stderr"].update({n: _finite(v) for n, v in cal.pad.stderr.items()})
         table["pad"] = _scale_table(cal.pad, lambda n: THERMAL_CONSTANTS[n][0]) | {"constants": {n: float(v) for n, v in cal.pad.values.items()}}
+        if cal.pad_base is None:  # the records' base: the 300mm preset on the coarse grid (what `cmpsim validate` compares on)
+            table["pad"] |= {"base_preset": "300mm", "base_grid": "coarse"}
     if cal.die is not None:
         die = _scale_table(cal.die, lambda n: DIE_CONSTANTS[n][0])
         die["process"] = cal.die.records[0].process
@@ -226,3 +228,25 @@ def apply_die_constants(kwargs: dict, dc: DieConstants | None, *, given: tuple =
         out["planarization_length"] = consts.pop("planarization_length")
     out.update(consts)
     return out
+
+
+def pad_base(source, config):
+    """The base configuration of pad records under a process file (``source``: its path, or None): the pad's
+    calibration base (the 300mm preset on the coarse grid) with the file's pad constants, else ``config``;
+    without a file None (the default base of :func:`cmpsim.calibration.thermal.predict_thermal`)."""
+    import tomllib
+
+    from ..inputs.config import Config
+    from ..io import read_text
+
+    if source is None:
+        return None
+    try:
+        data = tomllib.loads(read_text(Path(source), "config file"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"config file {str(source)!r} is not valid TOML: {exc}") from None
+    pad = (data.get("calibration") or {}).get("pad") if isinstance(data.get("calibration"), dict) else None
+    if isinstance(pad, dict) and pad.get("base_preset"):
+        base = Config.preset(str(pad["base_preset"])).replace(grid=str(pad.get("base_grid", "coarse")))
+        return base.replace(friction_coefficient=config.friction_coefficient, pad_heat_transfer_coefficient=config.pad_heat_transfer_coefficient)
+    return config

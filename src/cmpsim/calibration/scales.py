@@ -40,6 +40,8 @@ class ScaleCalibration:
     pad_choice: object = None
     data: list = field(default_factory=list)
     notes: list = field(default_factory=list)
+    #: the base of the pad's records: None = the 300mm preset on the coarse grid (no configuration given), else the configuration
+    pad_base: object = None
 
     def constant_rows(self) -> list[list[str]]:
         """[scale, constant, fitted, 95 % interval, unit] of every fitted constant (display units for the film's)."""
@@ -145,7 +147,7 @@ def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_n
     if not (measurements.datasets or measurements.structures or measurements.pad):
         raise ValueError("nothing to calibrate: the data hold no removal, test-structure or pad rows"
                          + (" (lot rows are compared by `cmpsim validate --recipe`, not calibrated)" if measurements.lots else ""))
-    out = ScaleCalibration(cfg, data=list(measurements.paths))
+    out = ScaleCalibration(cfg, data=list(measurements.paths), pad_base=pad_config)
     if measurements.lots:
         out.notes.append(f"{len(measurements.lots)} lot row(s) not calibrated: `cmpsim validate LOT.csv --config FILE --recipe RECIPE.toml` compares them")
     if measurements.pad:
