@@ -214,9 +214,10 @@ def _print_hotspots(console, hot) -> None:
     sure = "probability" in hot[0]
     levels = any(h.get("level") for h in hot)
     show = [([h.get("level", "")] if levels else []) + [h["kind"], f"{h['x'] * 1e6:.1f}", f"{h['y'] * 1e6:.1f}", nm(h["value"]), nm(h["limit"])]
-            + ([f"[{h['interval'][0] * 1e9:.4g}, {h['interval'][1] * 1e9:.4g}] nm", f"{h['probability']:.3f}"] if sure else []) for h in hot[:10]]
-    header = (["level"] if levels else []) + ["kind", "x (um)", "y (um)", "value", "limit"] + (["95 % interval", "P(exceeds limit)"] if sure else [])
-    title = f"worst hotspots ({len(hot)} in all" + (f"; {sum(h['probability'] > 0.975 for h in hot)} fail with probability > 0.975)" if sure else ")")
+            + ([f"{h['interval'][0] * 1e9:.4g}-{h['interval'][1] * 1e9:.4g}", f"{h['probability']:.3f}"] if sure else []) for h in hot[:10]]
+    header = (["level"] if levels else []) + ["kind", "x (um)", "y (um)", "value", "limit"] + (["interval nm", "probability"] if sure else [])
+    title = f"worst hotspots ({len(hot)} in all" + (f"; 95 % intervals; {sum(h['probability'] > 0.975 for h in hot)} exceed their limit with "
+                                                     "probability > 0.975)" if sure else ")")
     console.print(_rich_table(title, header, show))
 
 
