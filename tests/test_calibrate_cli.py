@@ -180,6 +180,45 @@ def test_a_bad_row_is_refused_by_row_and_column_and_nothing_is_written(tmp_path,
     assert res.exit_code == 2 and f"row {row_no}, column '{column}'" in res.output and not v.exists()
 
 
+@pytest.mark.slow
+def test_validate_compares_lot_rows_with_cmpsim_lot_of_the_recipe(tmp_path):
+    recipe = Path(cmpsim.__file__).parent / "data" / "recipe_oxide.toml"
+    lot = CliRunner().invoke(main, ["lot", str(recipe), "--wafers", "2", "--seed", "0", "--set", "grid=coarse", "--json"])
+    assert lot.exit_code == 0, lot.output
+    w = json.loads(lot.stdout)["wafers"]
+    p = tmp_path / "lot.csv"
+    p.write_text("dataset,quantity,value,unit,uncertainty,wafer,film\nlot,thickness,690,nm,5,1,oxide\nlot,removal,300,nm,5,2,\n")
+    res = CliRunner().invoke(main, ["validate", str(p), "--recipe", str(recipe), "--grid", "coarse", "--out", str(tmp_path / "v")])
+    assert res.exit_code == 0, res.output
+    pts = list(csv.DictReader(open(tmp_path / "v" / "points.csv")))
+    assert float(pts[0]["model"]) == pytest.approx(w[0]["final_thickness_mean"] * 1e9, rel=1e-6)
+    assert float(pts[1]["model"]) == pytest.approx((w[1]["incoming_mean"] - w[1]["final_thickness_mean"]) * 1e9, rel=1e-6)
+    bad = CliRunner().invoke(main, ["validate", str(BLANKET), "--recipe", str(recipe), "--out", str(tmp_path / "b")])
+    assert bad.exit_code == 2 and "--recipe" in bad.output and not (tmp_path / "b").exists()
+
+
+def test_structures_of_one_sweep_predict_unseen_widths_from_the_command_line(tmp_path):
+    """Issue 38's done-when from the CLI: calibrated on 0.25, 0.5, 2, 10 um (no --free), the unseen 0.35, 1, 5 um within 25 nm RMS, in order."""
+    text = DISHING.read_text().splitlines()
+    keep = [ln for ln in text if not any(f",{w} um," in ln for w in ("0.35", "1", "5"))]
+    held = [ln for ln in text if ln.startswith("#") or ln.startswith("dataset") or any(f",{w} um," in ln for w in ("0.35", "1", "5"))]
+    (tmp_path / "fit.csv").write_text("\n".join(keep) + "\n")
+    (tmp_path / "held.csv").write_text("\n".join(held) + "\n")
+    out = tmp_path / "die.toml"
+    res = CliRunner().invoke(main, ["calibrate", str(tmp_path / "fit.csv"), "--quiet", "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    # the start's Jacobian cannot tell the feature modulus from the contact height; the fitted constants can
+    assert "fixed feature_modulus" not in res.output and "chosen again at the first fit's values" in res.output
+    assert "fit feature_modulus" in res.output
+    res = CliRunner().invoke(main, ["validate", str(tmp_path / "held.csv"), "--config", str(out), "--out", str(tmp_path / "v")])
+    assert res.exit_code == 0, res.output
+    pts = list(csv.DictReader(open(tmp_path / "v" / "points.csv")))
+    model = [float(r["model"]) for r in pts]
+    measured = [float(r["measured"]) for r in pts]
+    rms = (sum((m - y) ** 2 for m, y in zip(model, measured)) / 3) ** 0.5
+    assert rms == pytest.approx(9.8, abs=0.2) and rms < 25 and model == sorted(model)
+
+
 def test_lot_rows_are_read_in_si():
     from cmpsim.calibration.lotdata import read_lot_rows
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["KindComparison", "compare_structures", "compare_pad", "list_lots", "write_points"]
+__all__ = ["KindComparison", "compare_structures", "compare_pad", "list_lots", "compare_lots", "write_points"]
 
 
 @dataclass
@@ -81,6 +81,31 @@ def list_lots(records) -> KindComparison:
     rows = [_row(r.dataset, r.quantity, f"wafer={r.wafer}" + (f", film={r.film}" if r.film else ""), "nm", 1e-9, r.value, r.uncertainty, None,
                  r.source, "not compared") | {"status": "not compared"} for r in records]
     return KindComparison("lot", "nm", rows, float("nan"), "read and checked; `cmpsim validate` does not run `cmpsim lot` for them yet")
+
+
+def compare_lots(records, recipe, overrides: dict | None = None, control: str = "none", seed: int | None = 0) -> KindComparison:
+    """Lot rows against ``cmpsim lot`` of ``recipe`` (a path or a parsed recipe) over as many wafers as the rows name.
+
+    ``thickness`` is the wafer's mean top film left (``final_thickness_mean``), ``removal`` its
+    incoming mean less that; ``overrides`` the process file's constants (``recipe_overrides``); the
+    lot's incoming thicknesses are drawn with ``seed`` (``cmpsim lot --seed``). Values in nm.
+    """
+    from ..polisher.lot import run_lot
+    from ..polisher.recipe import read_recipe
+
+    parsed = read_recipe(recipe) if not hasattr(recipe, "steps") else recipe
+    top = parsed.films[0].material
+    for r in records:
+        if r.film is not None and r.film != top:
+            raise ValueError(f"{r.path}:{r.line}: column 'film': {r.film!r} is not the recipe's top film ({top}), the film a lot measures")
+    n = max(r.wafer for r in records)
+    lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {})
+    rows = []
+    for r in records:
+        w = lot.wafers[r.wafer - 1]
+        model = w.final_thickness_mean if r.quantity == "thickness" else w.incoming_mean - w.final_thickness_mean
+        rows.append(_row(r.dataset, r.quantity, f"wafer={r.wafer}, film={top}", "nm", 1e-9, r.value, r.uncertainty, float(model), r.source))
+    return KindComparison("lot", "nm", rows, _rms(rows), f"cmpsim lot {parsed.source} ({n} wafers, control {control}, seed {seed})")
 
 
 def write_points(path, film_rows: list, comparisons: list) -> None:

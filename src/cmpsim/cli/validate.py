@@ -15,7 +15,10 @@ from .inputs import config_options, load_config
 @config_options
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default="validation", show_default=True, help="Directory for parity.png, points.csv and datasets.csv.")
 @click.option("--markdown", is_flag=True, help="Print the tables as Markdown instead of rich tables.")
-def validate_command(data, config_path, preset, assignments, grid, out_dir, markdown):
+@click.option("--recipe", "recipe_path", type=click.Path(dir_okay=False), default=None, help="Lot rows (a wafer column) are compared with `cmpsim lot RECIPE` over as many wafers as they name, with the constants of --config (as `cmpsim lot --config`).")
+@click.option("--lot-control", "lot_control", type=click.Choice(["none", "ewma"]), default="none", show_default=True, help="--recipe: the lot's run-to-run control (cmpsim lot --control).")
+@click.option("--lot-seed", "lot_seed", type=int, default=0, show_default=True, help="--recipe: the seed of the lot's incoming thicknesses (cmpsim lot --seed).")
+def validate_command(data, config_path, preset, assignments, grid, out_dir, markdown, recipe_path, lot_control, lot_seed):
     """Compare the model with measured data; with no DATA, every data set shipped with cmpsim.
 
     DATA are CSV files in the format of cmpsim/data/README.md (operating conditions with
@@ -25,9 +28,9 @@ def validate_command(data, config_path, preset, assignments, grid, out_dir, mark
     structures (dishing, erosion, step_height) are polished by the die model with the die
     constants of a process file (--config), pad rows (pad_temperature_rise, friction_coefficient)
     by the pad's heat balance with its friction and heat removal; lot rows (a wafer column) are
-    read and checked. points.csv holds the measured and model values of every point.
+    read and checked, and with --recipe compared with `cmpsim lot` of that recipe. points.csv holds the measured and model values of every point.
     """
-    from ..calibration.crosscheck import compare_pad, compare_structures, list_lots, write_points
+    from ..calibration.crosscheck import compare_lots, compare_pad, compare_structures, list_lots, write_points
     from ..calibration.heldout import compare_with_preston
     from ..calibration.mixed import read_all
     from ..calibration.processfile import die_constants, pad_base
@@ -47,8 +50,16 @@ def validate_command(data, config_path, preset, assignments, grid, out_dir, mark
             comparisons.append(compare_structures(meas.structures, dc.constants if dc else None, cfg))
         if meas is not None and meas.pad:
             comparisons.append(compare_pad(meas.pad, pad_base(config_path, cfg)))
+        if recipe_path and not (meas is not None and meas.lots):
+            raise ValueError("--recipe compares lot rows (a wafer column); the data hold none")
         if meas is not None and meas.lots:
-            comparisons.append(list_lots(meas.lots))
+            if recipe_path:
+                from .inputs import recipe_overrides
+
+                overrides = recipe_overrides(config_path, assignments) | ({"grid": grid} if grid else {})  # as `cmpsim lot --config --set`
+                comparisons.append(compare_lots(meas.lots, recipe_path, overrides, lot_control, lot_seed))
+            else:
+                comparisons.append(list_lots(meas.lots))
     except ValueError as exc:
         _fail(str(exc))
     out = Path(out_dir)
