@@ -263,5 +263,7 @@ def test_the_web_die_takes_a_process_file_as_its_inputs(tmp_path):
         assert hot and all(h["interval"][0] <= h["value"] <= h["interval"][1] and 0 <= h["probability"] <= 1 for h in hot)
         plain = post({"grid": "coarse"}).json()["hotspots"]
         assert plain and not any("probability" in h for h in plain)
+        solved = client.post("/api/solve", json=process_file)  # the other routes read its inputs and leave the table
+        assert solved.status_code == 200, solved.text
         bad = post(process_file, process="oxide")
         assert bad.status_code == 422 and bad.json()["parameter"] == "process"
