@@ -29,7 +29,7 @@ __all__ = ["Measurements", "read_all", "family_of"]
 @dataclass
 class Measurements:
     """The rows of some files by family: ``datasets`` (film, :class:`cmpsim.validation.data.Dataset`),
-    ``structures`` (:class:`StructureRecord`), ``pad`` (:class:`ThermalRecord`), ``lots`` (:class:`LotRecord`)."""
+    ``structures`` (:class:`~cmpsim.calibration.measurements.StructureRecord`), ``pad`` (:class:`~cmpsim.calibration.measurements.ThermalRecord`), ``lots`` (:class:`~cmpsim.calibration.lotdata.LotRecord`)."""
 
     datasets: list = field(default_factory=list)
     structures: list = field(default_factory=list)

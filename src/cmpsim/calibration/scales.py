@@ -28,8 +28,8 @@ __all__ = ["ScaleCalibration", "calibrate_scales", "split_free"]
 
 @dataclass
 class ScaleCalibration:
-    """The calibration of every scale: ``film`` (:class:`CalibrationResult`), ``die`` (:class:`DieCalibration`),
-    ``pad`` (:class:`ThermalCalibration`), each None without its data; ``config`` the process file's
+    """The calibration of every scale: ``film`` (:class:`~cmpsim.calibration.result.CalibrationResult`), ``die`` (:class:`~cmpsim.calibration.die.DieCalibration`),
+    ``pad`` (:class:`~cmpsim.calibration.thermal.ThermalCalibration`), each None without its data; ``config`` the process file's
     configuration (the film fit's, with the pad's constants); the choices of the die and the pad."""
 
     config: object
@@ -123,7 +123,7 @@ def split_free(names, measurements) -> tuple[list[str], list[str], list[str]]:
 def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_nfev=None, progress=False, pad_config=None) -> ScaleCalibration:
     """Calibrate the pad, the films and the die on ``measurements`` (:class:`cmpsim.calibration.mixed.Measurements`).
 
-    ``config``: the starting configuration (default :meth:`Config.default`); ``pad_config``: the
+    ``config``: the starting configuration (default :meth:`~cmpsim.inputs.config.Config.default`); ``pad_config``: the
     base of the pad's records (default ``config`` if given, else the 300mm preset on the coarse
     grid, the base of docs/calibrate.md); ``free``: names of any scale (``--free``), each fitted
     at its scale; a scale with data and no name in ``free`` lets its data choose.
