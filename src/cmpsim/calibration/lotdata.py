@@ -54,10 +54,26 @@ class LotRecord:
     path: str = ""
 
 
-def read_lot_rows(path, text: str) -> list[LotRecord]:
-    """The lot rows of ``text`` (the CSV content of the file ``path``; its comment lines give the ``dataset``), SI."""
+def _length(rec: dict, column: str, unit: str, where: str) -> float:
+    """The SI length of ``rec[column]`` in ``unit``; LotDataError naming the column (or the unit)."""
     from ..inputs import units
 
+    text = rec.get(column, "")
+    try:
+        v = float(text)
+    except ValueError:
+        raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number") from None
+    try:
+        si = float(units.convert(v, unit, "m"))
+    except Exception as exc:  # noqa: BLE001 - pint's errors: a unit that is not a length
+        raise LotDataError(f"{where}: column 'unit': {unit!r} is not a length ({exc})") from None
+    if not math.isfinite(si):
+        raise LotDataError(f"{where}: column {column!r}: {text!r} is not finite")
+    return si
+
+
+def read_lot_rows(path, text: str) -> list[LotRecord]:
+    """The lot rows of ``text`` (the CSV content of the file ``path``; its comment lines give the ``dataset``), SI."""
     path = Path(path)
     meta: dict[str, str] = {}
     body: list[tuple[int, str]] = []
@@ -96,26 +112,12 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
         if not unit:
             raise LotDataError(f"{where}: column 'unit' is empty; a lot row is a length (nm, angstrom, um)")
 
-        def length(column: str) -> float:
-            text = rec.get(column, "")
-            try:
-                v = float(text)
-            except ValueError:
-                raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number") from None
-            try:
-                si = float(units.convert(v, unit, "m"))
-            except Exception as exc:  # pint's errors: a unit that is not a length
-                raise LotDataError(f"{where}: column 'unit': {unit!r} is not a length ({exc})") from None
-            if not math.isfinite(si):
-                raise LotDataError(f"{where}: column {column!r}: {text!r} is not finite")
-            return si
-
-        value = length("value")
+        value = _length(rec, "value", unit, where)
         if value < 0:
             raise LotDataError(f"{where}: column 'value': a {q} must be >= 0; got {rec['value']}")
         unc = None
         if rec.get("uncertainty"):
-            unc = length("uncertainty")
+            unc = _length(rec, "uncertainty", unit, where)
             if not unc > 0:
                 raise LotDataError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")
         out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
