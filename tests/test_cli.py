@@ -185,7 +185,9 @@ def test_every_solving_command_takes_its_inputs_the_same_way(tmp_path, monkeypat
     monkeypatch.setattr("cmpsim.validation.validate", capture("validate"))
     monkeypatch.setattr("cmpsim.calibration.calibrate", capture("calibrate"))
     inputs = ["--config", str(cfg_file), "--preset", "paper", "--set", "particle_diameter=150nm", "--grid", "12x32"]
-    for command in (["reproduce", "--out", str(tmp_path / "r")], ["validate", "--out", str(tmp_path / "v")], ["calibrate", str(cfg_file), "--free", "pad_modulus"]):
+    data = tmp_path / "rates.csv"  # calibrate reads its data before it fits (rows of every scale: docs/calibrate.md)
+    data.write_text("dataset,quantity,value,unit,applied_pressure\nr,removal_rate_mean,100,nm/min,3 psi\nr,removal_rate_mean,200,nm/min,6 psi\n")
+    for command in (["reproduce", "--out", str(tmp_path / "r")], ["validate", "--out", str(tmp_path / "v")], ["calibrate", str(data), "--free", "pad_modulus"]):
         res = CliRunner().invoke(main, command + inputs)
         assert res.exit_code == 2 and "stop here" in res.stderr, res.output
         cfg = seen[command[0]]

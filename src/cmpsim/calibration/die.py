@@ -42,7 +42,7 @@ import numpy as np
 from .measurements import StructureRecord
 
 __all__ = ["DIE_CONSTANTS", "ISOLATED_PITCH", "TestStructure", "DieCalibration", "predict_die", "calibrate_die",
-           "choose_free", "heldout_comparison"]
+           "choose_free", "heldout_comparison", "start_jacobian", "start_values"]
 
 #: Pitch (m) of an isolated line in a field: far beyond every length of the die model (the
 #: pad's bulge into the gap converges beyond 1000 pad thicknesses, cmpsim.die.reach).
@@ -282,6 +282,27 @@ def choose_free(records) -> tuple[list[str], dict[str, str]]:
     for k in dropped:  # never more constants than points - 1
         why.pop(k)
     return [k for k in free if k in why], why
+
+
+def start_jacobian(records, names, config=None, step: float = 1e-3, values: dict | None = None) -> np.ndarray:
+    """d((model - measured)/u)/d ln(constant) of every record at the start values (or at ``values``, SI, over them;
+    central differences), one column per name.
+
+    The columns' directions are what :func:`cmpsim.calibration.identify.choose` compares: a constant
+    whose column the others span cannot be separated from them by these records.
+    """
+    records = list(records)
+    s0 = {**start_values(config, records[0].process), **(values or {})}
+    given = {k for r in records for k in r.inputs}
+    u = np.array([r.uncertainty if r.uncertainty is not None else 1e-9 for r in records])
+    J = np.zeros((len(records), len(names)))
+    for k, n in enumerate(names):
+        if n in given:
+            continue  # set per point by the data: no direction of its own
+        up = predict_die(records, {**(values or {}), n: s0[n] * math.exp(step)}, config)
+        dn = predict_die(records, {**(values or {}), n: s0[n] * math.exp(-step)}, config)
+        J[:, k] = np.nan_to_num((up - dn) / (2 * step * u))
+    return J
 
 
 # ----------------------------------------------------------------------------- the result

@@ -147,8 +147,10 @@ def _length(rec, column, where, required=False, positive=True):
     return v
 
 
-def read_measurements(path) -> list:
+def read_measurements(path, text: str | None = None) -> list:
     """Read a measurement file: a list of :class:`StructureRecord` and :class:`ThermalRecord` (SI).
+
+    ``text``: the file's content when already read (``path`` then only names it in messages).
 
     Raises :class:`MeasurementError` naming the file, the row's line and the column of the
     first problem: a missing required column or value, an unknown quantity, process or column, a
@@ -160,7 +162,8 @@ def read_measurements(path) -> list:
     from ..io import read_text
 
     path = Path(path)
-    text = read_text(path, "measurement file", MeasurementError)
+    if text is None:
+        text = read_text(path, "measurement file", MeasurementError)
     meta: dict[str, str] = {}
     body: list[tuple[int, str]] = []
     for i, line in enumerate(text.splitlines(), start=1):

@@ -16,7 +16,8 @@ from ..inputs.config import Config
 from ..physics.chemistry import input_names
 from ..validation import point_config
 
-__all__ = ["Candidate", "QuantityKind", "QUANTITY_KINDS", "kind_of", "candidates", "FILM_REMOVAL"]
+__all__ = ["Candidate", "QuantityKind", "QUANTITY_KINDS", "kind_of", "candidates", "choose_for", "FILM_REMOVAL", "TEST_STRUCTURES",
+           "PAD_HEAT"]
 
 
 @dataclass(frozen=True)
@@ -38,6 +39,12 @@ class QuantityKind:
     name: str
     quantities: tuple
     candidates: Callable
+    #: the scale the kind calibrates: "wafer" (film removal, fitted through the wafer solve by
+    #: :func:`cmpsim.calibration.calibrate`), "die" (test structures) or "pad" (the pad's heat balance)
+    scale: str = "wafer"
+    #: for the die and pad scales: ``jacobian(records, names, config)`` -> d(whitened residual)/d ln(input)
+    #: at the start, one column per name (what :func:`cmpsim.calibration.identify.choose` reads)
+    jacobian: Callable | None = None
 
 
 def _film_candidates(points, config: Config) -> list[Candidate]:
@@ -68,16 +75,68 @@ def _film_candidates(points, config: Config) -> list[Candidate]:
 #: Removal rates, removal depths and remaining thickness of blanket films (wafer mean or profile).
 FILM_REMOVAL = QuantityKind("film removal", ("removal_rate", "removal_rate_mean", "removal", "thickness"), _film_candidates)
 
+
+
+def _structure_candidates(records, config: Config) -> list[Candidate]:
+    """Test structures: the die constants their quantities approach (:func:`cmpsim.calibration.die.choose_free`)."""
+    from .die import DIE_CONSTANTS, choose_free
+
+    _, why = choose_free(records)
+    return [Candidate(n, why[n]) for n in DIE_CONSTANTS if n in why]
+
+
+def _structure_jacobian(records, names, config):
+    from .die import start_jacobian
+
+    return start_jacobian(records, names, config)
+
+
+def _pad_candidates(records, config: Config) -> list[Candidate]:
+    """Pad temperature and friction: the summit friction and the heat removal (:func:`cmpsim.calibration.thermal.choose_free`)."""
+    from .thermal import choose_free
+
+    names, why = choose_free(records)
+    return [Candidate(n, why[n]) for n in names]
+
+
+def _pad_jacobian(records, names, config):
+    from .thermal import start_jacobian
+
+    return start_jacobian(records, names, config)
+
+
+#: Dishing, erosion and step height of test structures: the die model's constants (docs/calibrate.md).
+TEST_STRUCTURES = QuantityKind("test structures", ("dishing", "erosion", "step_height"), _structure_candidates, "die", _structure_jacobian)
+#: The pad's temperature rise and effective friction: the summit friction and the pad's heat removal.
+PAD_HEAT = QuantityKind("pad temperature", ("pad_temperature_rise", "friction_coefficient"), _pad_candidates, "pad", _pad_jacobian)
+
 #: The kinds of measurement that choose inputs, by name.
-QUANTITY_KINDS: dict[str, QuantityKind] = {FILM_REMOVAL.name: FILM_REMOVAL}
+QUANTITY_KINDS: dict[str, QuantityKind] = {k.name: k for k in (FILM_REMOVAL, TEST_STRUCTURES, PAD_HEAT)}
 
 
-def kind_of(quantity: str) -> QuantityKind | None:
-    """The kind a quantity belongs to (None: no kind chooses inputs for it yet)."""
+def kind_of(quantity: str, scale: str | None = None) -> QuantityKind | None:
+    """The kind a quantity belongs to (None: no kind chooses inputs for it yet), of ``scale`` if given."""
     for kind in QUANTITY_KINDS.values():
-        if quantity in kind.quantities:
+        if quantity in kind.quantities and (scale is None or kind.scale == scale):
             return kind
     return None
+
+
+def choose_for(kind: QuantityKind, records, config: Config, max_free: int | None = None):
+    """The inputs ``records`` of a die or pad ``kind`` choose: its candidates, kept while the Jacobian at
+    the start separates them, with one degree of freedom left (:class:`cmpsim.calibration.identify.Choice`)."""
+    from .identify import choose
+
+    cands = kind.candidates(records, config)
+    names = [c.name for c in cands]
+    if not names:
+        from .identify import Choice
+
+        return Choice(notes=[f"{kind.name}: these records choose no input"])
+    J = kind.jacobian(records, names, config)
+    if max_free is None:  # uncertainties on every record: absolute, no point is needed for the error estimate
+        max_free = len(records) if all(r.uncertainty is not None for r in records) else max(len(records) - 1, 1)
+    return choose(J, names, [c.why for c in cands], max_free)
 
 
 def candidates(datasets, config: Config) -> tuple[list[Candidate], list[str]]:
@@ -86,7 +145,7 @@ def candidates(datasets, config: Config) -> tuple[list[Candidate], list[str]]:
     notes = []
     for ds in datasets:
         for p in ds.points:
-            kind = kind_of(p.quantity)
+            kind = kind_of(p.quantity, "wafer")
             if kind is None:
                 notes.append(f"{ds.name}: quantity {p.quantity!r} chooses no input (no registered kind); give --free to fit inputs to it")
                 continue

@@ -34,7 +34,7 @@ import numpy as np
 from .measurements import ThermalRecord
 
 __all__ = ["THERMAL_CONSTANTS", "FrictionalPower", "frictional_power", "predict_thermal", "calibrate_thermal", "ThermalCalibration",
-           "step_rise"]
+           "step_rise", "choose_free", "start_values", "start_jacobian"]
 
 #: The constants a pad calibration may fit: name -> (SI unit, valid (low, high), meaning).
 THERMAL_CONSTANTS = {
@@ -198,6 +198,45 @@ class ThermalCalibration:
         return "\n".join(out)
 
 
+def choose_free(records) -> tuple[list[str], dict[str, str]]:
+    """The pad constants the quantities of ``records`` could identify, and why (name -> reason), in preference order."""
+    temps = [r for r in records if r.quantity == "pad_temperature_rise"]
+    fric = [r for r in records if r.quantity == "friction_coefficient"]
+    reasons = {}
+    if fric or len({r.time for r in temps}) >= 3:
+        reasons["friction_coefficient"] = ("a measured friction is q/(P U) of the summits and the slurry" if fric else
+                                           "a trace's early slope is q/(heat capacity), independent of the heat removal")
+    if temps:
+        reasons["pad_heat_transfer_coefficient"] = "the rise approaches f q / h_s: with q known, it fixes the heat removal"
+    return [n for n in THERMAL_CONSTANTS if n in reasons], reasons
+
+
+def start_values(records, config=None) -> dict:
+    """The uncalibrated pad constants (SI): the configuration's friction, the heat removal of the slurry flow of the first record."""
+    from ..inputs.config import Config
+    from ..physics.thermal import slurry_heat_transfer_coefficient
+    from ..polisher.engine import SLURRY_FLOW_RATE
+
+    base = config if config is not None else Config.preset("300mm").replace(grid="coarse")
+    cfg0 = _record_config(records[0], base)
+    hs0 = cfg0.pad_heat_transfer_coefficient or float(slurry_heat_transfer_coefficient(
+        records[0].slurry_flow_rate or SLURRY_FLOW_RATE, 4 * math.pi * cfg0.centre_distance * 0.5 * cfg0.wafer_diameter))
+    return {"friction_coefficient": float(cfg0.friction_coefficient), "pad_heat_transfer_coefficient": hs0}
+
+
+def start_jacobian(records, names, config=None, step: float = 1e-3) -> np.ndarray:
+    """d((model - measured)/u)/d ln(constant) of every record at the start values (central differences), one column per name."""
+    s0 = start_values(records, config)
+    base = config if config is not None else None
+    u = np.array([r.uncertainty if r.uncertainty is not None else max(abs(r.value), 1e-12) * 0.1 for r in records])
+    J = np.empty((len(records), len(names)))
+    for k, n in enumerate(names):
+        up = predict_thermal(records, {**s0, n: s0[n] * math.exp(step)}, base)
+        dn = predict_thermal(records, {**s0, n: s0[n] * math.exp(-step)}, base)
+        J[:, k] = (up - dn) / (2 * step * u)
+    return J
+
+
 def calibrate_thermal(records, config=None, free=None, *, start: dict | None = None, max_nfev: int = 100) -> ThermalCalibration:
     """Fit the summit friction and the pad's heat removal to measured pad temperatures or frictions.
 
@@ -220,30 +259,15 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
     if not records:
         raise ValueError("no pad records (pad_temperature_rise, friction_coefficient) to calibrate on")
     base = config if config is not None else Config.preset("300mm").replace(grid="coarse")
-    temps = [r for r in records if r.quantity == "pad_temperature_rise"]
-    fric = [r for r in records if r.quantity == "friction_coefficient"]
     if free is None:
-        reasons = {}
-        if fric or len({r.time for r in temps}) >= 3:
-            reasons["friction_coefficient"] = ("a measured friction is q/(P U) of the summits and the slurry" if fric else
-                                               "a trace's early slope is q/(heat capacity), independent of the heat removal")
-        if temps:
-            reasons["pad_heat_transfer_coefficient"] = "the rise approaches f q / h_s: with q known, it fixes the heat removal"
-        free = [n for n in THERMAL_CONSTANTS if n in reasons]
+        free, reasons = choose_free(records)
     else:
         free = [free] if isinstance(free, str) else list(free)
         reasons = {n: "asked for" for n in free}
     for n in free:
         if n not in THERMAL_CONSTANTS:
             raise ValueError(f"unknown pad constant {n!r}; calibratable: {', '.join(THERMAL_CONSTANTS)}")
-    # the start: the configuration's friction, the slurry flow's heat removal of the first record
-    from ..physics.thermal import slurry_heat_transfer_coefficient
-    from ..polisher.engine import SLURRY_FLOW_RATE
-
-    cfg0 = _record_config(records[0], base)
-    hs0 = cfg0.pad_heat_transfer_coefficient or float(slurry_heat_transfer_coefficient(
-        records[0].slurry_flow_rate or SLURRY_FLOW_RATE, 4 * math.pi * cfg0.centre_distance * 0.5 * cfg0.wafer_diameter))
-    s0 = {"friction_coefficient": float(cfg0.friction_coefficient), "pad_heat_transfer_coefficient": hs0}
+    s0 = start_values(records, base)
     s0.update(start or {})
     x0 = np.array([s0[n] for n in free])
     lo = np.array([THERMAL_CONSTANTS[n][1][0] for n in free])

@@ -43,21 +43,25 @@ def _split_names(values) -> list[str]:
 
 @main.command(name="calibrate", cls=_ListOptionsCommand)
 @click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--free", "free", multiple=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius (or repeated, or comma-separated). Without it the data's quantities choose the inputs they can identify (removal rates of a film: its chemistry constants) and the report says which and why.")
-@click.option("--bounds", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Bounds with units, e.g. --bounds pad_modulus=20MPa:500MPa (repeatable; default a factor 10 either side).")
+@click.option("--free", "free", multiple=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius (or repeated, or comma-separated); die constants (contact_height, summit_radius, ...) and pad constants (friction_coefficient, pad_heat_transfer_coefficient) are fitted at their scale. Without it the data's quantities choose the inputs they can identify (removal rates of a film: its chemistry constants; test structures: the die constants; pad temperature and friction: the friction and the heat removal) and the report says which and why.")
+@click.option("--bounds", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Bounds with units of an input fitted through the wafer solve, e.g. --bounds pad_modulus=20MPa:500MPa (repeatable; default a factor 10 either side).")
 @config_options
-@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="The process file: the fitted configuration, accepted by every command's --config (and `cmpsim run FILE`), with a [calibration] table (constants, 95 % intervals, correlations) whose constants `cmpsim polish --config` and `cmpsim lot --config` apply with the recipe's own tool.")
-@click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser.")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="The process file: the fitted configuration, accepted by every command's --config (and `cmpsim run FILE`), with a [calibration] table (constants, 95 % intervals, correlations) whose constants `cmpsim polish --config` and `cmpsim lot --config` apply with the recipe's own tool, and the die constants with their covariance ([calibration.die]) that `cmpsim die --config` applies.")
+@click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser of the wafer-scale fit.")
 @click.option("--quiet", is_flag=True, help="Do not print the evaluations while fitting.")
 def calibrate_command(data, free, bounds, config_path, preset, assignments, grid, out_path, max_evaluations, quiet):
-    """Fit inputs to measurements (scipy least_squares, bounded); without --free the data choose them.
+    """Fit inputs to measurements at every scale (scipy least_squares, bounded); without --free the data choose them.
 
-    Reports the inputs chosen and why (and what the data cannot separate, from the fit's Jacobian),
-    fitted values with standard errors and 95 % intervals, their correlations, the residuals before
-    and after and the leave-one-out error beside Preston's law's and the mean's, and writes the
-    process file to --out (nothing is written when the fit cannot run).
+    DATA may mix removal rates (a `film` column), test structures (quantity dishing, erosion,
+    step_height) and pad rows (pad_temperature_rise, friction_coefficient): the pad is calibrated
+    first, then the films with its constants, then the die at the calibrated rates. Reports, per
+    scale, the inputs chosen and why (and what the data cannot separate, from the Jacobian),
+    fitted values with 95 % intervals, their correlations, the residuals before and after (and
+    the leave-one-out error of removal series beside Preston's law's), and writes one process file
+    to --out (nothing is written when a file or the fit cannot be used).
     """
-    from ..calibration import calibrate
+    from ..calibration.mixed import read_all
+    from ..calibration.scales import calibrate_scales
 
     names = _split_names(free)
     bnds = {}
@@ -69,7 +73,11 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
             lo, hi = rng.split(":", 1)
             bnds[name.strip().replace("-", "_")] = (lo.strip(), hi.strip())
         cfg = load_config(config_path, assignments, preset, grid)
-        result = calibrate(list(data), names or None, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
+        measurements = read_all(list(data))
+        # the pad's records: on the configuration given, else on the base of docs/calibrate.md (the 300mm preset, coarse grid)
+        given = bool(config_path or preset or assignments or grid)
+        result = calibrate_scales(measurements, cfg, names or None, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet,
+                                  pad_config=cfg if given else None)
     except ValueError as exc:
         _fail(str(exc))
     try:

@@ -84,6 +84,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
         pl = to_si(pl_text, "m", "--planarization-length", "3 mm") if pl_text else None
         kwargs = dict(process=process, planarization_length=pl, weighting=weighting, feature_contact=feature_contact,
                       cell_size=to_si(cell_text, "m", "--cell-size", "50 um") if cell_text else None, spec=spec, **parse_assignments(params))
+        kwargs = _calibrated(kwargs, config_path, params, wafer, stack_path)
         t = to_si(time_text, "s", "--time", "90 s") if time_text else None
         window = to_si(window_text, "m", "--window", "20 um") if window_text else None
         if fill and stack_path:
@@ -162,6 +163,8 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     rows = [[str(r["index"]), f"{100 * r['density']:.0f} %", um(r["line_width"], 1e6, "um"), f"{r['effective_density']:.3f}", um(r["step_height"]), um(r["dishing"]), um(r["erosion"])]
             for r in d["regions"]]
     console.print(_rich_table(f"die {die.layout.name!r} ({die.process.kind}) after {d['time']:.1f} s", ["region", "density", "line width", "eff. density", "step height", "dishing", "erosion"], rows))
+    if d.get("hotspots") and "probability" in d["hotspots"][0]:  # a calibrated run: the hotspots with their intervals
+        _print_hotspots(console, d["hotspots"])
     console.print(f"planarization length {d['planarization_length'] * 1e3:.3g} mm, {d['weighting']} weighting (from the pad stack: "
                   f"{d['planarization_length_gaussian_from_pad'] * 1e3:.3g} mm Gaussian, {d['planarization_length_elliptic_from_pad'] * 1e3:.3g} mm elliptic); "
                   f"blanket rate {die.blanket_rate * 6e10:.4g} nm/min; time to planarize {um(d['time_to_planarize'], 1, 's')}"
@@ -194,14 +197,45 @@ def _print_layout_run(console, result, is_stack: bool, wafer: bool) -> None:
                                                        "dishing max", "erosion max", "hotspots"], rows))
     hot = result.to_dict()["hotspots"] if is_stack else levels[0].to_dict()["hotspots"]
     if hot:
-        show = [[h.get("level", ""), h["kind"], f"{h['x'] * 1e6:.1f}", f"{h['y'] * 1e6:.1f}", nm(h["value"]), nm(h["limit"])] for h in hot[:10]]
-        console.print(_rich_table(f"worst hotspots ({len(hot)} in all)", ["level", "kind", "x (um)", "y (um)", "value", "limit"], show))
+        _print_hotspots(console, hot)
     if wafer:
         import numpy as np
 
         console.print(f"{len(result.x)} dies ({result.reading} reading); blanket rate {np.min(result.blanket_rate) * 6e10:.4g}-"
                       f"{np.max(result.blanket_rate) * 6e10:.4g} nm/min; hotspots per die {int(np.min(result.hotspot_count))}-"
                       f"{int(np.max(result.hotspot_count))}, {int(np.sum(result.hotspot_count))} on the wafer", highlight=False)
+
+
+def _print_hotspots(console, hot) -> None:
+    """The ten worst hotspots; a calibrated run (--config with the die's covariance) adds the 95 % interval and the probability of failing."""
+    def nm(v):
+        return "-" if v is None else f"{v * 1e9:.4g} nm"
+
+    sure = "probability" in hot[0]
+    levels = any(h.get("level") for h in hot)
+    show = [([h.get("level", "")] if levels else []) + [h["kind"], f"{h['x'] * 1e6:.1f}", f"{h['y'] * 1e6:.1f}", nm(h["value"]), nm(h["limit"])]
+            + ([f"{h['interval'][0] * 1e9:.4g}-{h['interval'][1] * 1e9:.4g}", f"{h['probability']:.3f}"] if sure else []) for h in hot[:10]]
+    header = (["level"] if levels else []) + ["kind", "x (um)", "y (um)", "value", "limit"] + (["interval nm", "probability"] if sure else [])
+    title = f"worst hotspots ({len(hot)} in all" + (f"; 95 % intervals; {sum(h['probability'] > 0.975 for h in hot)} exceed their limit with "
+                                                     "probability > 0.975)" if sure else ")")
+    console.print(_rich_table(title, header, show))
+
+
+def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> dict:
+    """The die keywords with the calibrated die constants of a process file (--config) and, except with --wafer, their covariance."""
+    from ..calibration.processfile import apply_die_constants, die_constants
+
+    dc = die_constants(config_path) if config_path else None
+    if dc is None:
+        return kwargs
+    if stack_path:
+        raise ValueError(f"--stack with --config {config_path}: a stack's levels set their own process; its die constants apply to one "
+                         "level at a time (cmpsim die LAYOUT --layer ... --process ...)")
+    if wafer and dc.uncertainty is not None:
+        from .group import _warn
+
+        _warn("--wafer: the calibrated die constants apply; their intervals do not (a wafer of dies does not carry the covariance yet)")
+    return apply_die_constants(kwargs, dc, given=tuple(parse_assignments(params)), with_uncertainty=not wafer)
 
 
 def _fill_setup(layers, pdk, layer_map, fill_layer, size_text, spacing_text, keepout_text, edge_text):

@@ -183,14 +183,20 @@ def write_lyrdb(path, hotspots: list[dict], top: str, description: str = "", ori
 
 
 def write_csv(path, hotspots: list[dict]) -> Path:
-    """Write the hotspots as CSV (SI: m), atomically: level, kind, x, y, value, limit and the window box."""
+    """Write the hotspots as CSV (SI: m), atomically: level, kind, x, y, value, limit and the window box; a calibrated
+    run adds interval_low_m, interval_high_m (95 %) and probability (of exceeding the limit)."""
     from ..io import atomic_write_text
 
     buf = _io.StringIO()
-    buf.write("level,kind,x_m,y_m,value_m,limit_m,xmin_m,ymin_m,xmax_m,ymax_m\n")
+    sure = any("probability" in h for h in hotspots)  # a calibrated run: the 95 % interval and the probability of exceeding the limit
+    buf.write("level,kind,x_m,y_m,value_m,limit_m,xmin_m,ymin_m,xmax_m,ymax_m" + (",interval_low_m,interval_high_m,probability" if sure else "") + "\n")
     for h in hotspots:
         b = h["box"]
         buf.write(f"{h.get('level') or ''},{h['kind']},{h['x']:.9g},{h['y']:.9g},{h['value']:.6g},{h['limit']:.6g},"
-                  f"{b[0]:.9g},{b[1]:.9g},{b[2]:.9g},{b[3]:.9g}\n")
+                  f"{b[0]:.9g},{b[1]:.9g},{b[2]:.9g},{b[3]:.9g}")
+        if sure:
+            iv = h.get("interval") or ("", "")
+            buf.write(f",{iv[0]:.6g},{iv[1]:.6g},{h['probability']:.6g}" if "probability" in h else ",,,")
+        buf.write("\n")
     atomic_write_text(Path(path), buf.getvalue())
     return Path(path)

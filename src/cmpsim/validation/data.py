@@ -249,16 +249,18 @@ def _parse_float(text: str, what: str, where: str) -> float:
     return v
 
 
-def load_datasets(path) -> list[Dataset]:
+def load_datasets(path, text: str | None = None) -> list[Dataset]:
     """Read a data file; one :class:`Dataset` per distinct value of its ``dataset`` column.
 
+    ``text``: the file's content when already read (``path`` then only names it in messages).
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
     from ..io import read_text
 
     path = Path(path)
-    text = read_text(path, "data file", DataError)
+    if text is None:
+        text = read_text(path, "data file", DataError)
     meta: dict[str, str] = {}
     body_lines: list[tuple[int, str]] = []
     for i, line in enumerate(text.splitlines(), start=1):

@@ -136,6 +136,7 @@ def die_routes(limits: Limits, slots: JobSlots) -> APIRouter:
             raise InputError(f"inputs is not valid JSON ({exc}); give the inputs of the wafer solve as a JSON object", "inputs") from None
         cfg = config_from_request(base)
         limits.check_grid(cfg.numerics.grid)
+        calibrated = _calibrated(base, process, weighting)
         names = [n.strip() for n in maps.split(",") if n.strip()] if maps else None
 
         # ---- the upload, into a directory of its own, removed with everything in it
@@ -151,12 +152,12 @@ def die_routes(limits: Limits, slots: JobSlots) -> APIRouter:
             if size == 0:
                 raise InputError(f"the request body is empty: send the layout file ({_LAYOUT_FORMATS}) as the body", "layout")
             run = dict(path=path, name=name, layers=layers, pdk=pdk, window=window_m, process=process, spec=limits_m, top=top,
-                       time=t, blanket_rate=rate, weighting=weighting, config=cfg, include=include, names=names)
+                       time=t, blanket_rate=rate, weighting=weighting, config=cfg, include=include, names=names, calibrated=calibrated)
             return await run_in_threadpool(_run, **run)
         finally:
             shutil.rmtree(folder, ignore_errors=True)
 
-    def _run(path: Path, name: str, layers, pdk, window, process, spec, top, time, blanket_rate, weighting, config, include, names):
+    def _run(path: Path, name: str, layers, pdk, window, process, spec, top, time, blanket_rate, weighting, config, include, names, calibrated):
         from ..die import simulate
         from ..die.chip import layout_die
         from ..layout import read_layout, top_cell
@@ -176,7 +177,7 @@ def die_routes(limits: Limits, slots: JobSlots) -> APIRouter:
                     ny = max(-(-box.height() // w), 1)
                     limits.check_windows(nx, ny, window)
                 die = layout_die(layout, layers, window, top=top, pdk=pdk)  # as `cmpsim die LAYOUT --layer ...`
-                result = simulate(die, time, config=config, blanket_rate=blanket_rate, process=process, weighting=weighting, spec=spec)
+                result = simulate(die, time, config=config, blanket_rate=blanket_rate, weighting=weighting, spec=spec, **calibrated)
             except EquilibriumError as exc:
                 raise InputError(f"no equilibrium of the wafer solve: {exc}") from None
             except ValueError as exc:
@@ -190,3 +191,18 @@ def die_routes(limits: Limits, slots: JobSlots) -> APIRouter:
             return JSONResponse(obj)
 
     return router
+
+
+def _calibrated(base, process: str, weighting: str) -> dict:
+    """The die keywords of a run whose inputs are a process file of `cmpsim calibrate` (its JSON): the calibrated die
+    constants of ``calibration.die`` and their covariance (hotspots with interval and probability); else the process."""
+    from ..calibration.processfile import apply_die_constants, die_constants
+
+    try:
+        dc = die_constants(base) if isinstance(base, dict) else None
+        out = apply_die_constants({"process": process, "weighting": weighting}, dc,
+                                  option={"process": "process", "weighting": "weighting", "planarization_length": "planarization_length", "param": "inputs"})
+    except ValueError as exc:
+        raise InputError(str(exc), "process" if str(exc).startswith("process") else "weighting" if str(exc).startswith("weighting") else "inputs") from None
+    out.pop("weighting", None)
+    return out

@@ -1,0 +1,125 @@
+"""Per-wafer results of a lot against ``wafer``: the rows of a measurement file that carry a ``wafer`` column.
+
+A fab keeps the post-polish metrology of every wafer of a lot. In the CSV format of
+``cmpsim validate`` (``cmpsim/data/README.md``) such a row has
+
+| column | required | meaning |
+|---|---|---|
+| ``wafer`` | yes | the wafer's place in the lot, 1, 2, ... (an integer) |
+| ``quantity`` | yes | ``thickness`` (wafer-mean film left after the recipe) or ``removal`` (wafer-mean depth removed) |
+| ``value``, ``unit`` | yes | a length with its unit (``nm``, ``angstrom``, ``um``) |
+| ``uncertainty`` | no | one standard uncertainty, in ``unit`` |
+| ``film`` | no | the film measured (default: the recipe's target film) |
+| ``dataset``, ``source``, ``label``, ``note`` | no | as in every data file |
+
+:func:`read_lot_rows` reads them (SI) and refuses a bad row naming its line and column;
+``cmpsim validate LOT.csv --recipe RECIPE.toml`` compares them with ``cmpsim lot`` of that recipe.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "read_lot_rows"]
+
+#: Per-wafer quantities of a lot: name -> meaning (both lengths, m).
+LOT_QUANTITIES = {
+    "thickness": "wafer-mean thickness of the film left after the recipe",
+    "removal": "wafer-mean depth of film removed by the recipe",
+}
+#: The columns a lot row may fill.
+LOT_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "wafer", "film", "source", "label", "note")
+
+
+class LotDataError(ValueError):
+    """A lot row that cannot be used; the message names the file, the line and the column."""
+
+
+@dataclass(frozen=True)
+class LotRecord:
+    """One measured wafer of a lot (SI): ``wafer`` (1-based), ``quantity``, ``value`` and ``uncertainty`` (m), ``film``."""
+
+    wafer: int
+    quantity: str
+    value: float
+    uncertainty: float | None
+    film: str | None = None
+    dataset: str = ""
+    line: int = 0
+    source: str = ""
+    label: str = ""
+    path: str = ""
+
+
+def _length(rec: dict, column: str, unit: str, where: str) -> float:
+    """The SI length of ``rec[column]`` in ``unit``; LotDataError naming the column (or the unit)."""
+    from ..inputs import units
+
+    text = rec.get(column, "")
+    try:
+        v = float(text)
+    except ValueError:
+        raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number") from None
+    try:
+        si = float(units.convert(v, unit, "m"))
+    except Exception as exc:  # noqa: BLE001 - pint's errors: a unit that is not a length
+        raise LotDataError(f"{where}: column 'unit': {unit!r} is not a length ({exc})") from None
+    if not math.isfinite(si):
+        raise LotDataError(f"{where}: column {column!r}: {text!r} is not finite")
+    return si
+
+
+def read_lot_rows(path, text: str) -> list[LotRecord]:
+    """The lot rows of ``text`` (the CSV content of the file ``path``; its comment lines give the ``dataset``), SI."""
+    path = Path(path)
+    meta: dict[str, str] = {}
+    body: list[tuple[int, str]] = []
+    for i, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s.startswith("#"):
+            content = s.lstrip("#").strip()
+            if ":" in content:
+                k, v = content.split(":", 1)
+                if k.strip() and " " not in k.strip():
+                    meta[k.strip().lower()] = v.strip()
+            continue
+        if s:
+            body.append((i, line))
+    if not body:
+        raise LotDataError(f"{path}: no header row and no data rows")
+    header = [h.strip() for h in next(csv.reader([body[0][1]]))]
+    for col in header:
+        if col not in LOT_COLUMNS:
+            raise LotDataError(f"{path}:{body[0][0]}: column {col!r} has no meaning for a lot row; lot rows take {', '.join(LOT_COLUMNS)}")
+    out = []
+    for (lineno, _), row in zip(body[1:], csv.reader([t for _, t in body[1:]])):
+        where = f"{path}:{lineno}"
+        rec = {h: c.strip() for h, c in zip(header, row)}
+        q = rec.get("quantity", "")
+        if q not in LOT_QUANTITIES:
+            raise LotDataError(f"{where}: column 'quantity': a lot row (with a wafer) takes {', '.join(LOT_QUANTITIES)}; got {q!r}")
+        w = rec.get("wafer", "")
+        try:
+            wafer = int(w)
+        except ValueError:
+            raise LotDataError(f"{where}: column 'wafer': {w!r} is not a wafer number (an integer >= 1)") from None
+        if wafer < 1:
+            raise LotDataError(f"{where}: column 'wafer': {w!r} must be >= 1 (the first wafer of the lot is 1)")
+        unit = rec.get("unit", "")
+        if not unit:
+            raise LotDataError(f"{where}: column 'unit' is empty; a lot row is a length (nm, angstrom, um)")
+
+        value = _length(rec, "value", unit, where)
+        if value < 0:
+            raise LotDataError(f"{where}: column 'value': a {q} must be >= 0; got {rec['value']}")
+        unc = None
+        if rec.get("uncertainty"):
+            unc = _length(rec, "uncertainty", unit, where)
+            if not unc > 0:
+                raise LotDataError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")
+        out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
+                             lineno, rec.get("source", ""), rec.get("label", ""), str(path)))
+    return out

@@ -1,0 +1,168 @@
+"""Measurement files of every scale at once: each row to the reader of its family, errors by row and column.
+
+One file (or several) may hold rows of four families, told apart by the row:
+
+* **film**: removal rates, depths and profiles, and the other quantities of ``cmpsim validate``
+  (:func:`cmpsim.validation.data.load_datasets`);
+* **structure**: ``dishing``, ``erosion``, ``step_height`` of test structures, and
+* **pad**: ``pad_temperature_rise``, ``friction_coefficient`` (the pad's effective friction q/(P U))
+  (:func:`cmpsim.calibration.measurements.read_measurements`);
+* **lot**: a row with a ``wafer`` (:func:`cmpsim.calibration.lotdata.read_lot_rows`).
+
+Each family's reader sees the file with the other families' rows blanked (so its line numbers are
+the file's) and only the columns it knows; a column of another family filled in a row is refused
+naming the row. Every message names the file, the line, the row (1 = the first data row) and the
+column.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+__all__ = ["Measurements", "read_all", "family_of"]
+
+
+@dataclass
+class Measurements:
+    """The rows of some files by family: ``datasets`` (film, :class:`cmpsim.validation.data.Dataset`),
+    ``structures`` (:class:`~cmpsim.calibration.measurements.StructureRecord`), ``pad`` (:class:`~cmpsim.calibration.measurements.ThermalRecord`), ``lots`` (:class:`~cmpsim.calibration.lotdata.LotRecord`)."""
+
+    datasets: list = field(default_factory=list)
+    structures: list = field(default_factory=list)
+    pad: list = field(default_factory=list)
+    lots: list = field(default_factory=list)
+    paths: list = field(default_factory=list)
+
+    def __len__(self) -> int:
+        return sum(len(d.points) for d in self.datasets) + len(self.structures) + len(self.pad) + len(self.lots)
+
+
+def family_of(quantity: str, wafer: str = "") -> str:
+    """The family of a row: ``lot`` (it has a wafer), ``structure``, ``pad`` or ``film``."""
+    from .measurements import STRUCTURE_QUANTITIES, THERMAL_QUANTITIES
+
+    if wafer:
+        return "lot"
+    if quantity in STRUCTURE_QUANTITIES:
+        return "structure"
+    if quantity in THERMAL_QUANTITIES:
+        return "pad"
+    return "film"
+
+
+def _accepts(fam: str, column: str) -> bool:
+    from ..die.process import DIE_PARAMETERS
+    from ..inputs.config import PARAMETERS
+    from ..validation.data import EXTRA_CONDITIONS, META_COLUMNS, POINT_COLUMNS
+    from .lotdata import LOT_COLUMNS
+    from .measurements import _COMMON, _STRUCTURE_COLUMNS, _THERMAL_EXTRA
+
+    if fam == "film":
+        return column in META_COLUMNS or column in EXTRA_CONDITIONS or column in POINT_COLUMNS or (
+            column in PARAMETERS and (PARAMETERS[column].section != "numerics" or column == "model"))
+    if fam == "lot":
+        return column in LOT_COLUMNS
+    return column in _COMMON or column in _STRUCTURE_COLUMNS or column in DIE_PARAMETERS or column in _THERMAL_EXTRA or column in PARAMETERS
+
+
+class MixedDataError(ValueError):
+    """A measurement file that cannot be used: names the file, the line, the row and the column."""
+
+
+def _with_row(message: str, rows: dict[int, int]) -> str:
+    """``message`` of a family's reader with the row number of the whole file (``rows``: line -> row)."""
+    m = re.search(r":(\d+): (row \d+(, |: ))?", message)
+    if not m or int(m.group(1)) not in rows:
+        return message
+    sep = m.group(3) or ", "
+    return message[: m.start()] + f":{m.group(1)}: row {rows[int(m.group(1))]}{sep}" + message[m.end():]
+
+
+def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
+    """{family: (the file's text for that family's reader, line -> row)}; MixedDataError on a row that fits no family."""
+    lines = text.splitlines()
+    body = [(i, ln) for i, ln in enumerate(lines, start=1) if ln.strip() and not ln.strip().startswith("#")]
+    if not body:
+        return {"film": (text, {})}
+    header = [h.strip() for h in next(csv.reader([body[0][1]]))]
+    if "quantity" not in header:
+        return {"film": (text, {})}  # the reader names the missing column
+    q_at = header.index("quantity")
+    w_at = header.index("wafer") if "wafer" in header else None
+    rows: dict[int, int] = {}
+    fam_of_line: dict[int, str] = {}
+    parsed: dict[int, list[str]] = {}
+    for row_no, ((lineno, ln), row) in enumerate(zip(body[1:], csv.reader([t for _, t in body[1:]])), start=1):
+        rows[lineno] = row_no
+        if len(row) != len(header):
+            raise MixedDataError(f"{path}:{lineno}: row {row_no}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
+        parsed[lineno] = row
+        fam_of_line[lineno] = family_of(row[q_at].strip(), row[w_at].strip() if w_at is not None else "")
+    families = sorted(set(fam_of_line.values()))
+    reader = {"film": "film", "structure": "measurement", "pad": "measurement", "lot": "lot"}
+    groups = sorted({reader[f] for f in families})
+    if len(groups) == 1 and all(_accepts(families[0], c) for c in header):
+        return {groups[0]: (text, rows)}  # one family, every column its own: the reader sees the file as it is
+    out = {}
+    for g in groups:
+        fams = [f for f in families if reader[f] == g]
+        keep = [k for k, c in enumerate(header) if all(_accepts(f, c) for f in fams)]
+        new = []
+        for i, ln in enumerate(lines, start=1):
+            if i == body[0][0]:
+                new.append(_csv_line([header[k] for k in keep]))
+            elif i in parsed:
+                if reader[fam_of_line[i]] != g:
+                    new.append("")
+                    continue
+                row = parsed[i]
+                for k, c in enumerate(header):
+                    if k not in keep and row[k].strip():
+                        q = row[q_at].strip()
+                        raise MixedDataError(f"{path}:{i}: row {rows[i]}, column {c!r}: has no meaning for a {fam_of_line[i]} row "
+                                             f"(quantity {q!r}{', wafer ' + row[w_at].strip() if w_at is not None and row[w_at].strip() else ''}); leave it empty")
+                new.append(_csv_line([row[k] for k in keep]))
+            else:
+                new.append(ln)
+        out[g] = ("\n".join(new) + "\n", rows)
+    return out
+
+
+def _csv_line(values) -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="").writerow(values)
+    return buf.getvalue()
+
+
+def read_all(paths) -> Measurements:
+    """Read measurement files of every family (film, structures, pad, lots); ValueError naming file, line, row and column."""
+    from ..io import read_text
+    from ..validation.data import load_datasets
+    from .lotdata import read_lot_rows
+    from .measurements import StructureRecord, read_measurements
+
+    out = Measurements()
+    for p in [paths] if isinstance(paths, (str, Path)) else list(paths):
+        path = Path(p)
+        text = read_text(path, "data file", MixedDataError)
+        out.paths.append(str(path))
+        for group, (sub, rows) in _split(path, text).items():
+            try:
+                if group == "film":
+                    out.datasets += load_datasets(path, text=sub)
+                elif group == "lot":
+                    out.lots += read_lot_rows(path, sub)
+                else:
+                    for r in read_measurements(path, text=sub):
+                        (out.structures if isinstance(r, StructureRecord) else out.pad).append(r)
+            except ValueError as exc:
+                raise MixedDataError(_with_row(str(exc), rows)) from None
+    names = [d.name for d in out.datasets]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise MixedDataError(f"data set names must be unique; repeated: {', '.join(dup)}")
+    return out
