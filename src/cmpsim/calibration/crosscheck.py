@@ -83,12 +83,14 @@ def list_lots(records) -> KindComparison:
     return KindComparison("lot", "nm", rows, float("nan"), "read and checked; `cmpsim validate` does not run `cmpsim lot` for them yet")
 
 
-def compare_lots(records, recipe, overrides: dict | None = None, control: str = "none", seed: int | None = 0) -> KindComparison:
+def compare_lots(records, recipe, overrides: dict | None = None, control: str = "none", seed: int | None = 0,
+                 pad_constants: dict | None = None) -> KindComparison:
     """Lot rows against ``cmpsim lot`` of ``recipe`` (a path or a parsed recipe) over as many wafers as the rows name.
 
     ``thickness`` is the wafer's mean top film left (``final_thickness_mean``), ``removal`` its
     incoming mean less that; ``overrides`` the process file's constants (``recipe_overrides``); the
-    lot's incoming thicknesses are drawn with ``seed`` (``cmpsim lot --seed``). Values in nm.
+    lot's incoming thicknesses are drawn with ``seed`` (``cmpsim lot --seed``); ``pad_constants`` the
+    process file's glazing and conditioning constants (``[calibration.padlife]``). Values in nm.
     """
     from ..polisher.lot import run_lot
     from ..polisher.recipe import read_recipe
@@ -99,13 +101,14 @@ def compare_lots(records, recipe, overrides: dict | None = None, control: str = 
         if r.film is not None and r.film != top:
             raise ValueError(f"{r.path}:{r.line}: column 'film': {r.film!r} is not the recipe's top film ({top}), the film a lot measures")
     n = max(r.wafer for r in records)
-    lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {})
+    lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {}, pad_constants=pad_constants)
     rows = []
     for r in records:
         w = lot.wafers[r.wafer - 1]
         model = w.final_thickness_mean if r.quantity == "thickness" else w.incoming_mean - w.final_thickness_mean
         rows.append(_row(r.dataset, r.quantity, f"wafer={r.wafer}, film={top}", "nm", 1e-9, r.value, r.uncertainty, float(model), r.source))
-    return KindComparison("lot", "nm", rows, _rms(rows), f"cmpsim lot {parsed.source} ({n} wafers, control {control}, seed {seed})")
+    note = f"cmpsim lot {parsed.source} ({n} wafers, control {control}, seed {seed}" + (", calibrated pad life)" if pad_constants else ")")
+    return KindComparison("lot", "nm", rows, _rms(rows), note)
 
 
 def write_points(path, film_rows: list, comparisons: list) -> None:

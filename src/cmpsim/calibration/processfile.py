@@ -111,6 +111,14 @@ def scales_table(cal) -> dict:
         except ValueError as exc:  # an infinite covariance: the constants apply, without intervals on the hotspots
             die["uncertainty_note"] = f"no covariance written: {exc}"
         table["die"] = die
+    if getattr(cal, "padlife", None) is not None:
+        from .padlife import GLAZING_CONSTANTS
+
+        pl = _scale_table(cal.padlife, lambda n: GLAZING_CONSTANTS[n][0])
+        pl["constants"] = {n: float(v) for n, v in cal.padlife.constants.items()}  # every constant the lot runs with: fitted or default
+        pl["lot"] = cal.padlife.table()
+        pl["fixed"] = [f"{n}: {why}" for n, why in cal.padlife.left]  # what the lot could not separate, and why
+        table["padlife"] = pl
     return table
 
 
@@ -122,7 +130,8 @@ def write_scales_file(cal, path) -> Path:
 
     text = "# cmpsim process file from `cmpsim calibrate`; every value in SI units (see `cmpsim params`)\n"
     text += "# [calibration] lists the fitted constants: `cmpsim polish` and `cmpsim lot` apply those with the recipe's own tool;\n"
-    text += "# [calibration.die] holds the die constants and their covariance, which `cmpsim die --config` applies\n"
+    text += "# [calibration.die] holds the die constants and their covariance, which `cmpsim die --config` applies;\n"
+    text += "# [calibration.padlife] the pad life's glazing and conditioning constants, which `cmpsim lot --config` applies\n"
     text += cal.config.to_toml_text() + "\n" + tomli_w.dumps({"calibration": scales_table(cal)})
     atomic_write_text(Path(path), text)
     return Path(path)

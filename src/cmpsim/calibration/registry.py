@@ -17,7 +17,7 @@ from ..physics.chemistry import input_names
 from ..validation import point_config
 
 __all__ = ["Candidate", "QuantityKind", "QUANTITY_KINDS", "kind_of", "candidates", "choose_for", "FILM_REMOVAL", "TEST_STRUCTURES",
-           "PAD_HEAT"]
+           "PAD_HEAT", "PAD_LIFE"]
 
 
 @dataclass(frozen=True)
@@ -40,7 +40,8 @@ class QuantityKind:
     quantities: tuple
     candidates: Callable
     #: the scale the kind calibrates: "wafer" (film removal, fitted through the wafer solve by
-    #: :func:`cmpsim.calibration.calibrate`), "die" (test structures) or "pad" (the pad's heat balance)
+    #: :func:`cmpsim.calibration.calibrate`), "die" (test structures), "pad" (the pad's heat balance) or
+    #: "lot" (a lot's wafers: the pad life, whose ``config`` is a :class:`cmpsim.calibration.padlife.LotSetting`)
     scale: str = "wafer"
     #: for the die and pad scales: ``jacobian(records, names, config)`` -> d(whitened residual)/d ln(input)
     #: at the start, one column per name (what :func:`cmpsim.calibration.identify.choose` reads)
@@ -110,8 +111,27 @@ TEST_STRUCTURES = QuantityKind("test structures", ("dishing", "erosion", "step_h
 #: The pad's temperature rise and effective friction: the summit friction and the pad's heat removal.
 PAD_HEAT = QuantityKind("pad temperature", ("pad_temperature_rise", "friction_coefficient"), _pad_candidates, "pad", _pad_jacobian)
 
+
+
+def _lot_candidates(records, setting) -> list[Candidate]:
+    """A lot's wafers: the pad life's glazing and conditioning constants (:func:`cmpsim.calibration.padlife.choose_free`)."""
+    from .padlife import choose_free
+
+    names, why = choose_free(records, setting)
+    return [Candidate(n, why[n]) for n in names]
+
+
+def _lot_jacobian(records, names, setting):
+    from .padlife import start_jacobian
+
+    return start_jacobian(records, names, setting)
+
+
+#: Per-wafer thickness or removal of a lot (rows with a ``wafer``): the pad life's glazing and conditioning constants.
+PAD_LIFE = QuantityKind("pad life", ("thickness", "removal"), _lot_candidates, "lot", _lot_jacobian)
+
 #: The kinds of measurement that choose inputs, by name.
-QUANTITY_KINDS: dict[str, QuantityKind] = {k.name: k for k in (FILM_REMOVAL, TEST_STRUCTURES, PAD_HEAT)}
+QUANTITY_KINDS: dict[str, QuantityKind] = {k.name: k for k in (FILM_REMOVAL, TEST_STRUCTURES, PAD_HEAT, PAD_LIFE)}
 
 
 def kind_of(quantity: str, scale: str | None = None) -> QuantityKind | None:

@@ -9,7 +9,10 @@ and calibrates, in this order (each on the constants of the one before):
    through the wafer solve (:func:`cmpsim.calibration.calibrate`), with the pad's constants;
 3. **the die** (``dishing``, ``erosion``, ``step_height``): the die model's constants
    (:func:`cmpsim.calibration.die.calibrate_die`), timed structures without a ``blanket_rate``
-   at the calibrated film's rate.
+   at the calibrated film's rate;
+4. **the pad life** (a lot's rows: ``wafer``, ``thickness`` or ``removal``, with the lot's recipe,
+   ``lot``): the glazing and conditioning constants (:func:`cmpsim.calibration.padlife.calibrate_padlife`),
+   the lot run with the film's and the pad's constants as ``cmpsim lot --config`` runs it.
 
 Without ``--free`` each scale's data choose their inputs (:mod:`cmpsim.calibration.registry`,
 one :class:`~cmpsim.calibration.registry.QuantityKind` per kind, kept where the Jacobian at the
@@ -38,6 +41,8 @@ class ScaleCalibration:
     pad: object = None
     die_choice: object = None
     pad_choice: object = None
+    #: the pad life's calibration (:class:`~cmpsim.calibration.padlife.PadLifeCalibration`), None without lot rows and a recipe
+    padlife: object = None
     data: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     #: the base of the pad's records: None = the 300mm preset on the coarse grid (no configuration given), else the configuration
@@ -64,6 +69,12 @@ class ScaleCalibration:
             for n in self.die.free:
                 lo, hi = self.die.ci95[n]
                 rows.append(["die", n, f"{self.die.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", DIE_CONSTANTS[n][0]])
+        if self.padlife is not None:
+            from .padlife import GLAZING_CONSTANTS
+
+            for n in self.padlife.free:
+                lo, hi = self.padlife.ci95[n]
+                rows.append(["pad life", n, f"{self.padlife.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", GLAZING_CONSTANTS[n][0]])
         return rows
 
     def summary(self) -> str:
@@ -86,6 +97,10 @@ class ScaleCalibration:
             proc = self.die.records[0].process
             out += [f"== die ({proc}): {len(self.die.records)} test structure(s) ==", ""] + chosen(self.die_choice)
             out += [self.die.summary(), ""]
+        if self.padlife is not None:
+            lot = self.padlife.table()
+            out += [f"== pad life: {len(self.padlife.records)} wafer row(s) of a lot ({lot['recipe']}, conditioning {lot['conditioning']}, "
+                    f"control {lot['control']}) ==", "", self.padlife.summary(), ""]
         out.append("every constant calibrated (95 % intervals):")
         out.append(text_table(["scale", "constant", "fitted", "95 % interval", "unit"], self.constant_rows()))
         out += [f"note: {n}" for n in self.notes]
@@ -98,14 +113,19 @@ class ScaleCalibration:
         return write_scales_file(self, path)
 
 
-def split_free(names, measurements) -> tuple[list[str], list[str], list[str]]:
-    """(film, die, pad) names of ``--free``; ValueError naming a constant whose scale has no rows."""
+def split_free(names, measurements) -> tuple[list[str], list[str], list[str], list[str]]:
+    """(film, die, pad, pad life) names of ``--free``; ValueError naming a constant whose scale has no rows."""
     from .die import DIE_CONSTANTS
+    from .padlife import GLAZING_CONSTANTS
     from .thermal import THERMAL_CONSTANTS
 
-    film, die, pad = [], [], []
+    film, die, pad, life = [], [], [], []
     for n in names or []:
-        if n in DIE_CONSTANTS:
+        if n in GLAZING_CONSTANTS:
+            if not measurements.lots:
+                raise ValueError(f"--free {n}: a pad life constant needs a lot's rows (a wafer column, quantity thickness or removal) and --recipe")
+            life.append(n)
+        elif n in DIE_CONSTANTS:
             if not measurements.structures:
                 raise ValueError(f"--free {n}: a die constant needs test-structure rows (quantity dishing, erosion or step_height)")
             die.append(n)
@@ -117,16 +137,19 @@ def split_free(names, measurements) -> tuple[list[str], list[str], list[str]]:
             film.append(n)
     if film and not measurements.datasets:
         raise ValueError(f"--free {', '.join(film)}: fitted through the wafer solve, these need removal or other wafer-scale rows")
-    return film, die, pad
+    return film, die, pad, life
 
 
-def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_nfev=None, progress=False, pad_config=None) -> ScaleCalibration:
+def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_nfev=None, progress=False, pad_config=None,
+                     lot=None) -> ScaleCalibration:
     """Calibrate the pad, the films and the die on ``measurements`` (:class:`cmpsim.calibration.mixed.Measurements`).
 
     ``config``: the starting configuration (default :meth:`~cmpsim.inputs.config.Config.default`); ``pad_config``: the
     base of the pad's records (default ``config`` if given, else the 300mm preset on the coarse
     grid, the base of docs/calibrate.md); ``free``: names of any scale (``--free``), each fitted
-    at its scale; a scale with data and no name in ``free`` lets its data choose.
+    at its scale; a scale with data and no name in ``free`` lets its data choose; ``lot``: how the
+    lot rows were run (:class:`cmpsim.calibration.padlife.LotSetting`, its recipe; None: lot rows are
+    not calibrated, only noted).
     """
     from ..inputs.config import Config
     from . import calibrate
@@ -135,7 +158,9 @@ def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_n
     from .thermal import calibrate_thermal
 
     cfg = config if config is not None else Config.default()
-    film_free, die_free, pad_free = split_free(free, measurements)
+    film_free, die_free, pad_free, life_free = split_free(free, measurements)
+    if life_free and lot is None:
+        raise ValueError(f"--free {', '.join(life_free)}: the lot's recipe is needed (--recipe RECIPE.toml)")
     if bounds:
         from .die import DIE_CONSTANTS
         from .thermal import THERMAL_CONSTANTS
@@ -144,12 +169,15 @@ def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_n
         if other:
             raise ValueError(f"--bounds {', '.join(other)}: bounds apply to the inputs fitted through the wafer solve; the die and pad "
                              "constants are bounded a factor 30 either side of their start (die) or by their valid range (pad)")
-    if not (measurements.datasets or measurements.structures or measurements.pad):
+    if lot is not None and not measurements.lots:
+        raise ValueError("--recipe calibrates the pad life on a lot's rows (a wafer column); the data hold none")
+    if not (measurements.datasets or measurements.structures or measurements.pad or (measurements.lots and lot is not None)):
         raise ValueError("nothing to calibrate: the data hold no removal, test-structure or pad rows"
-                         + (" (lot rows are compared by `cmpsim validate --recipe`, not calibrated)" if measurements.lots else ""))
+                         + (" (lot rows calibrate the pad life with the lot's recipe: --recipe RECIPE.toml)" if measurements.lots else ""))
     out = ScaleCalibration(cfg, data=list(measurements.paths), pad_base=pad_config)
-    if measurements.lots:
-        out.notes.append(f"{len(measurements.lots)} lot row(s) not calibrated: `cmpsim validate LOT.csv --config FILE --recipe RECIPE.toml` compares them")
+    if measurements.lots and lot is None:
+        out.notes.append(f"{len(measurements.lots)} lot row(s) not calibrated: give the lot's recipe (--recipe RECIPE.toml) to calibrate the "
+                         "pad life on them")
     if measurements.pad:
         choice = None
         if not pad_free:
@@ -181,6 +209,17 @@ def calibrate_scales(measurements, config=None, free=None, *, bounds=None, max_n
         out.die_choice = choice
         if choice is not None:
             out.die.reasons = dict(choice.chosen)
+    if measurements.lots and lot is not None:
+        from .padlife import calibrate_padlife
+
+        extra = {}  # the lot runs with this calibration's film and pad constants, as `cmpsim lot --config` would
+        if out.film is not None:
+            extra.update(out.film.settings)
+            extra.update(out.film.values)
+        if out.pad is not None:
+            extra.update(out.pad.values)
+        lot.overrides = {**lot.overrides, **extra}
+        out.padlife = calibrate_padlife(measurements.lots, lot, life_free or None)
     out.config = cfg
     return out
 

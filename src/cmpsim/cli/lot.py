@@ -17,7 +17,7 @@ from .inputs import recipe_overrides
 @click.option("--idle-time", "idle_time", default="30 s", show_default=True, metavar="TIME", help="Time between two wafers (the pad cools; ex-situ conditioning works then).")
 @click.option("--qualification", type=click.IntRange(min=0), default=1, show_default=True, help="Monitor wafers polished with the recipe as written on the pad before the lot: the last one's measured rate seeds the EWMA and the lot starts on the pad they leave (0: a fresh pad, the EWMA seeded by the model).")
 @click.option("--worn-summits", "worn_summits", is_flag=True, help="The worn pad's summit-height std enters every step's wafer solve (docs/polisher.md: below about 2 um the solver finds no equilibrium).")
-@click.option("--config", "config_path", type=click.Path(dir_okay=False), default=None, help="A configuration file applied to every step unless the step sets the input: a process file of `cmpsim calibrate` applies its fitted constants (and the model choices they need) with the recipe's own tool; any other file the inputs it names. --set wins over it.")
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), default=None, help="A configuration file applied to every step unless the step sets the input: a process file of `cmpsim calibrate` applies its fitted constants (and the model choices they need) with the recipe's own tool, and its pad life's glazing and conditioning constants ([calibration.padlife]); any other file the inputs it names. --set wins over it.")
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input for every step unless the step sets it (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): wafers [{index, polish_time (s), removal_rate_mean (m/s), final_thickness_mean (m), final_thickness_nonuniformity (fraction), zone_pressures (Pa), ...}], target, units.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, metavar="DIR", help="Write lot.json, lot.csv and the lot plot lot.png into DIR.")
@@ -34,9 +34,12 @@ def lot_command(recipe, wafers, conditioning, control, seed, idle_time, qualific
     with command_errors():
         parsed = read_recipe(recipe)
         overrides = recipe_overrides(config_path, assignments)
+        from ..calibration.padlife import padlife_constants
+
+        pad_constants = padlife_constants(config_path) if config_path else None  # [calibration.padlife]: the glazing and conditioning
         idle = to_si(idle_time, "s", "--idle-time", example="s")
         result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle,
-                         qualification=qualification, worn_summits=worn_summits)
+                         qualification=qualification, worn_summits=worn_summits, pad_constants=pad_constants)
     if out_dir is not None:
         write_lot(result, out_dir)
     if as_json:

@@ -57,7 +57,10 @@ def validate_command(data, config_path, preset, assignments, grid, out_dir, mark
                 from .inputs import recipe_overrides
 
                 overrides = recipe_overrides(config_path, assignments) | ({"grid": grid} if grid else {})  # as `cmpsim lot --config --set`
-                comparisons.append(compare_lots(meas.lots, recipe_path, overrides, lot_control, lot_seed))
+                from ..calibration.padlife import padlife_constants
+
+                comparisons.append(compare_lots(meas.lots, recipe_path, overrides, lot_control, lot_seed,
+                                                padlife_constants(config_path) if config_path else None))
             else:
                 comparisons.append(list_lots(meas.lots))
     except ValueError as exc:

@@ -83,13 +83,17 @@ class FreshPad:
     ``density`` eta (1/m^2), summit radius ``radius`` R (m), heights truncated at ``cutoff`` sigma,
     and the pad's Archard wear coefficient ``wear_coefficient`` k_w (1/Pa: worn volume per unit
     area and sliding distance per unit pressure). Defaults: cmpsim's default pad (5 um, 2e8 /m^2,
-    7 um, 3 sigma; config.py and docs/model.md section 13) and k_w calibrated to Jeong et al. (2024)."""
+    7 um, 3 sigma; config.py and docs/model.md section 13) and k_w calibrated to Jeong et al. (2024);
+    ``critical_glazed_area`` G_c of eq. L4 (0: the calibrated default; a lot's own from
+    :func:`cmpsim.calibration.padlife.calibrate_padlife`)."""
 
     sigma: float = 5e-6
     density: float = 2.0e8
     radius: float = 7e-6
     cutoff: float = 3.0
     wear_coefficient: float = 0.0  # replaced by CALIBRATION below
+    #: G_c of the rate proxy (eq. L4) for this pad; 0 = the calibrated CALIBRATION["critical_glazed_area"]
+    critical_glazed_area: float = 0.0
 
     def __post_init__(self) -> None:
         for name in ("sigma", "density", "radius", "cutoff"):
@@ -98,6 +102,8 @@ class FreshPad:
                 raise ValueError(f"FreshPad.{name} must be finite and > 0; got {v!r}")
         if not (np.isfinite(self.wear_coefficient) and self.wear_coefficient >= 0):
             raise ValueError(f"FreshPad.wear_coefficient must be finite and >= 0 1/Pa; got {self.wear_coefficient!r}")
+        if not (np.isfinite(self.critical_glazed_area) and self.critical_glazed_area >= 0):
+            raise ValueError(f"FreshPad.critical_glazed_area must be finite and >= 0; got {self.critical_glazed_area!r}")
 
     @property
     def volume_scale(self) -> float:
@@ -186,6 +192,8 @@ def front_height(worn_volume, pad: FreshPad):
     target = np.asarray(worn_volume, dtype=float) / pad.volume_scale
     if np.any(target < 0) or not np.all(np.isfinite(target)):
         raise ValueError("worn_volume must be finite and >= 0 m")
+    if target.ndim == 0:  # one pad radius (a recipe's time step): the same bisection on scalars, ten times faster
+        return np.asarray(_front_scalar(float(target), float(pad.cutoff)))
     lo = np.full(target.shape, -40.0)
     hi = np.full(target.shape, float(pad.cutoff))
     for _ in range(80):
@@ -194,6 +202,24 @@ def front_height(worn_volume, pad: FreshPad):
         lo = np.where(above, mid, lo)
         hi = np.where(above, hi, mid)
     return np.where(target == 0, float(pad.cutoff), 0.5 * (lo + hi))
+
+
+def _front_scalar(target: float, c: float) -> float:
+    """:func:`front_height` of one normalised volume W / (eta pi R sigma^2), by the same 80 halvings on floats."""
+    if target == 0.0:
+        return c
+    pdf = lambda x: _INV_SQRT_2PI * math.exp(-0.5 * x * x)  # noqa: E731
+    cdf = lambda x: 0.5 * math.erfc(-x / math.sqrt(2.0))  # noqa: E731
+    nc, pc = cdf(c), pdf(c)
+    lo, hi = -40.0, c
+    for _ in range(80):
+        z = 0.5 * (lo + hi)
+        j2 = ((1.0 + z * z) * (nc - cdf(z)) - (c - 2.0 * z) * pc - z * pdf(z)) / nc
+        if j2 > target:
+            lo = z
+        else:
+            hi = z
+    return 0.5 * (lo + hi)
 
 
 def worn_moments(zeta_f, cutoff: float = 3.0):
@@ -273,7 +299,7 @@ def summit_constants(state: PadLifeState, pad: FreshPad | None = None) -> Summit
     G = 2.0 * math.pi * p.density * p.radius * p.sigma * flat_area(zf, p.cutoff)
     one = np.ones_like(zf)
     return SummitConstants(sigma=std / std0, density=one, radius=one, cutoff=zf, mean_shift=mean0 - mean,
-                           glazed_summits=glazed, glazed_area=G, rate_factor=rate_factor(G))
+                           glazed_summits=glazed, glazed_area=G, rate_factor=rate_factor(G, p.critical_glazed_area or None))
 
 
 # ----------------------------------------------------------------------------- data and calibration

@@ -37,6 +37,8 @@ removal rate besides (1 by default).
 
 from __future__ import annotations
 
+import functools
+
 import math
 import time as _time
 from dataclasses import dataclass, field
@@ -263,8 +265,15 @@ def _column(config: Config, cache: dict) -> ThermalColumn:
     hs = getattr(config, "pad_heat_transfer_coefficient", 0.0) or None  # 0: from the slurry flow
     key = (0.5 * config.wafer_diameter, config.centre_distance, config.slurry_temperature, hs)
     if key not in cache:
-        cache[key] = polisher_column(key[0], key[1], SLURRY_FLOW_RATE, platen=PLATEN, slurry_temperature=key[2], surface_coefficient=hs)
+        cache[key] = _built_column(key)
     return cache[key]
+
+
+@functools.lru_cache(maxsize=32)
+def _built_column(key) -> ThermalColumn:
+    """The thermal column of a (wafer radius, centre distance, slurry temperature, heat removal): built once
+    (an eigen-decomposition, 0.1 s; the column is frozen), shared by every polish and idle of a lot."""
+    return polisher_column(key[0], key[1], SLURRY_FLOW_RATE, platen=PLATEN, slurry_temperature=key[2], surface_coefficient=key[3])
 
 
 def _config_key(config: Config):

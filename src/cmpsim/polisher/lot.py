@@ -181,6 +181,8 @@ def run_lot(
     time_step: float = 1.0,
     qualification: int = 1,
     worn_summits: bool = False,
+    pad_constants: dict | None = None,
+    cache: dict | None = None,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -218,6 +220,14 @@ def run_lot(
         the pad they leave. 0: the lot starts on a fresh pad, the EWMA seeded by the model's rate for it.
     worn_summits : bool
         The worn pad's summit std enters every step's wafer solve (:class:`cmpsim.polisher.pad.PadLife`).
+    pad_constants : dict, optional
+        The glazing and conditioning constants ({name: SI}: ``pad_wear_coefficient``,
+        ``critical_glazed_area``, ``conditioner_rate_constant``) of a calibrated process file
+        (:func:`cmpsim.calibration.padlife.calibrate_padlife`); default the constants calibrated to
+        Jeong et al. (2024) (:data:`cmpsim.physics.padlife.CALIBRATION`).
+    cache : dict, optional
+        The step solves of earlier lots of the same recipe and inputs, reused (a calibration runs
+        the lot many times with other glazing constants, which do not change a wafer's solve).
     """
     t0 = _time.perf_counter()
     recipe = load_recipe(recipe)
@@ -227,7 +237,7 @@ def run_lot(
         disk = recipe.conditioner
     if not (isinstance(wafers, (int, np.integer)) and wafers >= 1):
         raise ValueError(f"wafers must be a whole number >= 1; got {wafers!r}")
-    life_model = PadLife(conditioning, disk, pad, worn_summits)  # checks the conditioning
+    life_model = PadLife(conditioning, disk, pad, worn_summits, pad_constants)  # checks the conditioning
     if control not in CONTROL:
         raise ValueError(f"control must be one of {CONTROL}; got {control!r}")
     if not (math.isfinite(idle_time) and idle_time >= 0):
@@ -248,7 +258,7 @@ def run_lot(
     # the wafer's radii and the controller's first rate: the monitor wafers on the lot's pad (or the
     # model's rate on a fresh pad), polished with the recipe as written at the nominal films
     pad_state = PadState(life=PadLifeState())
-    cache: dict = {}  # the step solves of the last wafer: a wafer with the same inputs is not solved again
+    cache = {} if cache is None else cache  # the step solves of the last wafer: a wafer with the same inputs is not solved again
     if qualification:
         solves = 0
         for _ in range(qualification):

@@ -23,7 +23,7 @@ recipe's steps (``docs/polisher.md``, "Pad life in a recipe"):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -86,23 +86,42 @@ class PadLife:
     disk: ConditionerDisk | None = None
     pad: FreshPad | None = None
     worn_summits: bool = False
+    #: the glazing and conditioning constants of a calibrated process file ({name: SI} of
+    #: :data:`cmpsim.calibration.padlife.GLAZING_CONSTANTS`; None or missing names: the calibrated defaults)
+    constants: dict | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.conditioning not in CONDITIONING:
             raise ValueError(f"conditioning must be one of {CONDITIONING}; got {self.conditioning!r}")
+        from ..calibration.padlife import check_constants
+
+        check_constants(self.constants or {})
+
+    def _disk(self) -> ConditionerDisk:
+        d = self.disk if self.disk is not None else DEFAULT_DISK
+        k = (self.constants or {}).get("conditioner_rate_constant")
+        return d if k is None else replace(d, rate_constant=float(k))
+
+    def _pad(self, config: Config) -> FreshPad:
+        p = self.pad if self.pad is not None else fresh_pad(config)
+        c = self.constants or {}
+        if "pad_wear_coefficient" in c:
+            p = replace(p, wear_coefficient=float(c["pad_wear_coefficient"]))
+        if "critical_glazed_area" in c:
+            p = replace(p, critical_glazed_area=float(c["critical_glazed_area"]))
+        return p
 
     def idle(self, state: PadLifeState, seconds: float) -> PadLifeState:
         """The pad after ``seconds`` between wafers: conditioned by the disk ex situ (eq. L2 with P = 0),
         unchanged otherwise (in situ the disk works only while polishing)."""
         if self.conditioning != "ex_situ":
             return state
-        return condition_ex_situ(state, seconds, self.disk if self.disk is not None else DEFAULT_DISK)
+        return condition_ex_situ(state, seconds, self._disk())
 
     def at(self, config: Config) -> "StepWear":
         """The pad's wear in a step of ``config``: its applied pressure, the sliding speed, the disk and
         the fresh pad (the given one, or the step's config's), resolved once for the step's time steps."""
-        return StepWear(float(config.applied_pressure), sliding_speed(config), self.conditioning,
-                        self.disk if self.disk is not None else DEFAULT_DISK, self.pad if self.pad is not None else fresh_pad(config))
+        return StepWear(float(config.applied_pressure), sliding_speed(config), self.conditioning, self._disk(), self._pad(config))
 
 
 @dataclass(frozen=True)
