@@ -109,6 +109,15 @@ def test_calibrate_from_the_command_line_writes_the_pad_life_and_lot_and_validat
     wafers = json.loads(lot.output)["wafers"]
     removed = np.array([w["incoming_mean"] - w["final_thickness_mean"] for w in wafers])
     assert np.sqrt(np.mean((removed - [r.value for r in records]) ** 2)) < 1.5 * NOISE
+    # held out: validate compares the rows with the calibrated lot (points.csv, measured and model)
+    val = CliRunner().invoke(main, ["validate", str(lot_csv), "--config", str(out), "--recipe", str(RECIPE), "--lot-conditioning", "none",
+                                    "--grid", "coarse", "--out", str(tmp_path / "heldout")])
+    assert val.exit_code == 0, val.output
+    import csv
+
+    rows = list(csv.DictReader((tmp_path / "heldout" / "points.csv").open()))
+    assert len(rows) == WAFERS and all(r["status"] == "ok" for r in rows)
+    assert max(abs(float(r["error"])) for r in rows) < 4.0  # nm
     # the uncalibrated lot misses the same wafers by tens of nm
     plain = CliRunner().invoke(main, ["lot", str(RECIPE), "--conditioning", "none", "--wafers", "10", "--seed", "0", "--set", "grid=coarse",
                                       "--json"])

@@ -84,13 +84,14 @@ def list_lots(records) -> KindComparison:
 
 
 def compare_lots(records, recipe, overrides: dict | None = None, control: str = "none", seed: int | None = 0,
-                 pad_constants: dict | None = None) -> KindComparison:
+                 pad_constants: dict | None = None, conditioning: str | None = None, qualification: int = 1) -> KindComparison:
     """Lot rows against ``cmpsim lot`` of ``recipe`` (a path or a parsed recipe) over as many wafers as the rows name.
 
     ``thickness`` is the wafer's mean top film left (``final_thickness_mean``), ``removal`` its
     incoming mean less that; ``overrides`` the process file's constants (``recipe_overrides``); the
     lot's incoming thicknesses are drawn with ``seed`` (``cmpsim lot --seed``); ``pad_constants`` the
-    process file's glazing and conditioning constants (``[calibration.padlife]``). Values in nm.
+    process file's glazing and conditioning constants (``[calibration.padlife]``); ``conditioning`` and
+    ``qualification`` as ``cmpsim lot`` takes them (None: the recipe's conditioning). Values in nm.
     """
     from ..polisher.lot import run_lot
     from ..polisher.recipe import read_recipe
@@ -101,7 +102,8 @@ def compare_lots(records, recipe, overrides: dict | None = None, control: str = 
         if r.film is not None and r.film != top:
             raise ValueError(f"{r.path}:{r.line}: column 'film': {r.film!r} is not the recipe's top film ({top}), the film a lot measures")
     n = max(r.wafer for r in records)
-    lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {}, pad_constants=pad_constants)
+    lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {}, pad_constants=pad_constants, conditioning=conditioning,
+                  qualification=qualification)
     rows = []
     for r in records:
         w = lot.wafers[r.wafer - 1]

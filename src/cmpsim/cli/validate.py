@@ -18,7 +18,10 @@ from .inputs import config_options, load_config
 @click.option("--recipe", "recipe_path", type=click.Path(dir_okay=False), default=None, help="Lot rows (a wafer column) are compared with `cmpsim lot RECIPE` over as many wafers as they name, with the constants of --config (as `cmpsim lot --config`).")
 @click.option("--lot-control", "lot_control", type=click.Choice(["none", "ewma"]), default="none", show_default=True, help="--recipe: the lot's run-to-run control (cmpsim lot --control).")
 @click.option("--lot-seed", "lot_seed", type=int, default=0, show_default=True, help="--recipe: the seed of the lot's incoming thicknesses (cmpsim lot --seed).")
-def validate_command(data, config_path, preset, assignments, grid, out_dir, markdown, recipe_path, lot_control, lot_seed):
+@click.option("--lot-conditioning", "lot_conditioning", type=click.Choice(["none", "ex_situ", "in_situ"]), default=None, help="--recipe: how the lot was conditioned (cmpsim lot --conditioning; default the recipe's, else in_situ).")
+@click.option("--lot-qualification", "lot_qualification", type=click.IntRange(min=0), default=1, show_default=True, help="--recipe: monitor wafers before the lot (cmpsim lot --qualification).")
+def validate_command(data, config_path, preset, assignments, grid, out_dir, markdown, recipe_path, lot_control, lot_seed, lot_conditioning,
+                     lot_qualification):
     """Compare the model with measured data; with no DATA, every data set shipped with cmpsim.
 
     DATA are CSV files in the format of cmpsim/data/README.md (operating conditions with
@@ -60,7 +63,7 @@ def validate_command(data, config_path, preset, assignments, grid, out_dir, mark
                 from ..calibration.padlife import padlife_constants
 
                 comparisons.append(compare_lots(meas.lots, recipe_path, overrides, lot_control, lot_seed,
-                                                padlife_constants(config_path) if config_path else None))
+                                                padlife_constants(config_path) if config_path else None, lot_conditioning, lot_qualification))
             else:
                 comparisons.append(list_lots(meas.lots))
     except ValueError as exc:
