@@ -118,6 +118,15 @@ def test_calibrate_from_the_command_line_writes_the_pad_life_and_lot_and_validat
     rows = list(csv.DictReader((tmp_path / "heldout" / "points.csv").open()))
     assert len(rows) == WAFERS and all(r["status"] == "ok" for r in rows)
     assert max(abs(float(r["error"])) for r in rows) < 4.0  # nm
+    # a recipe that runs its pad's life glazes with them in `cmpsim polish --config` too
+    recipe = tmp_path / "oxide_glazing.toml"
+    recipe.write_text(RECIPE.read_text().replace('[[film]]', 'conditioning = "none"\n[[film]]', 1))
+    rates = []
+    for extra in (["--config", str(out)], []):
+        pol = CliRunner().invoke(main, ["polish", str(recipe), *extra, "--set", "grid=coarse", "--json"])
+        assert pol.exit_code == 0, pol.output
+        rates.append(json.loads(pol.output)["steps"][0]["glazing"]["rate_factor"][-1])
+    assert rates[0] < rates[1] < 1  # the calibrated pad (k_w doubled) has glazed further by the end of the step
     # the uncalibrated lot misses the same wafers by tens of nm
     plain = CliRunner().invoke(main, ["lot", str(RECIPE), "--conditioning", "none", "--wafers", "10", "--seed", "0", "--set", "grid=coarse",
                                       "--json"])

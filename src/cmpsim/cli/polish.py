@@ -42,7 +42,13 @@ def polish_command(recipe, config_path, assignments, time_step, as_json, out_dir
         overrides = recipe_overrides(config_path, assignments)
         dt = to_si(time_step, "s", "--time-step", example="s")
         die = _riding_die(die_layout, layers, pdk, layer_map, top, window_text, sites_text, die_params, specs)
-        result = polish(parsed, overrides=overrides, time_step=dt, die=die)
+        from ..calibration.padlife import padlife_constants
+        from ..polisher.pad import PadLife
+
+        pad_constants = padlife_constants(config_path) if config_path else None
+        # a recipe that runs its pad's life (conditioning = ...) glazes with the process file's constants
+        pad_life = PadLife(parsed.conditioning, parsed.conditioner, constants=pad_constants) if pad_constants and parsed.conditioning else None
+        result = polish(parsed, overrides=overrides, time_step=dt, die=die, pad_life=pad_life)
     if out_dir is not None:
         from ..polisher.report import write_outputs
 
