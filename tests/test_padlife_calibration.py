@@ -15,8 +15,14 @@ import pytest
 from click.testing import CliRunner
 
 from cmpsim.calibration.lotdata import LotRecord
-from cmpsim.calibration.padlife import (GLAZING_CONSTANTS, LotSetting, calibrate_padlife, default_constants, padlife_constants,
-                                        predict_lot)
+from cmpsim.calibration.padlife import (
+    GLAZING_CONSTANTS,
+    LotSetting,
+    calibrate_padlife,
+    default_constants,
+    padlife_constants,
+    predict_lot,
+)
 from cmpsim.cli import main
 
 RECIPE = Path(str(resources.files("cmpsim") / "data" / "recipe_oxide.toml"))
@@ -44,7 +50,7 @@ def doubled_wear():
 
 
 def test_the_data_choose_the_wear_coefficient_and_recover_it_within_its_interval(doubled_wear):
-    true, records, cal = doubled_wear
+    true, _, cal = doubled_wear
     assert cal.free == ["pad_wear_coefficient"]
     lo, hi = cal.ci95["pad_wear_coefficient"]
     assert lo < true["pad_wear_coefficient"] < hi

@@ -208,8 +208,12 @@ def _front_scalar(target: float, c: float) -> float:
     """:func:`front_height` of one normalised volume W / (eta pi R sigma^2), by the same 80 halvings on floats."""
     if target == 0.0:
         return c
-    pdf = lambda x: _INV_SQRT_2PI * math.exp(-0.5 * x * x)  # noqa: E731
-    cdf = lambda x: 0.5 * math.erfc(-x / math.sqrt(2.0))  # noqa: E731
+    def pdf(x: float) -> float:
+        return _INV_SQRT_2PI * math.exp(-0.5 * x * x)
+
+    def cdf(x: float) -> float:
+        return 0.5 * math.erfc(-x / math.sqrt(2.0))
+
     nc, pc = cdf(c), pdf(c)
     lo, hi = -40.0, c
     for _ in range(80):
