@@ -79,6 +79,21 @@ def test_both_glazing_constants_free_are_recovered_within_their_intervals_and_th
     assert any("cannot be separated" in s and "correlation" in s for s in cal.identifiability)
 
 
+def test_a_constant_left_at_a_wrong_value_is_flagged_by_the_chi_square():
+    """Both k_w and G_c off (x 2, x 0.6): the lot chooses k_w alone, which predicts the wafers to 1.9 nm RMS but
+    absorbs G_c's error (k_w 1.10e-14 for a true 5.53e-15, with an interval that is conditional on G_c);
+    with 1 nm uncertainties the chi-square (36 for 9) says so, and the report warns."""
+    d = default_constants()
+    true = {"pad_wear_coefficient": 2.0 * d["pad_wear_coefficient"], "critical_glazed_area": 0.6 * d["critical_glazed_area"]}
+    records, setting = _lot(true)
+    cal = calibrate_padlife(records, setting)
+    assert cal.free == ["pad_wear_coefficient"]
+    assert np.sqrt(np.mean(cal.residuals_after**2)) < 2.5 * NOISE
+    assert cal.chi2 > 3 * cal.dof
+    text = cal.summary()
+    assert "conditional on critical_glazed_area" in text and "not described within its uncertainties" in text
+
+
 def test_a_conditioned_lot_recovers_the_conditioner_constant_and_reports_its_tie_to_the_wear():
     """Ex situ at half the default disk constant: the first wafers approach the balance of wear and renewal,
     which separates k_c from k_w (correlation +0.98, reported); G_c is not separable (fixed, said)."""

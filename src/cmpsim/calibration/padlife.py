@@ -193,7 +193,25 @@ class PadLifeCalibration:
         out.append(f"RMS residual {rb:.2f} nm before, {ra:.2f} nm after (chi-square {self.chi2:.4g}, {self.dof} degree(s) of freedom)")
         out += [f"fixed {n}: {why}" for n, why in self.left]
         out += [f"identifiability: {s}" for s in self.identifiability]
+        out += [f"warning: {w}" for w in self.warnings]
         return "\n".join(out)
+
+    @property
+    def warnings(self) -> list[str]:
+        """What the intervals do not cover: they are conditional on the constants left at their values, and
+        with uncertainties on every row a chi-square far above its degrees of freedom says those values are off."""
+        from scipy.stats import chi2 as chi2_dist
+
+        out = []
+        if self.left:
+            out.append("the intervals are conditional on " + ", ".join(n for n, _ in self.left) + " at the value(s) they were left at")
+        if self.absolute_sigma and self.dof > 0:
+            p = float(chi2_dist.sf(self.chi2, self.dof))
+            if p < 0.01:
+                out.append(f"chi-square {self.chi2:.4g} for {self.dof} degrees of freedom with the rows' uncertainties (p = {p:.2g}): the "
+                           "lot is not described within its uncertainties; a constant left at its value is likely off, and the fitted "
+                           "ones absorb it (their intervals are then too narrow)")
+        return out
 
 
 def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int = 60) -> PadLifeCalibration:

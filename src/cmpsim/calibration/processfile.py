@@ -118,6 +118,7 @@ def scales_table(cal) -> dict:
         pl["constants"] = {n: float(v) for n, v in cal.padlife.constants.items()}  # every constant the lot runs with: fitted or default
         pl["lot"] = cal.padlife.table()
         pl["fixed"] = [f"{n}: {why}" for n, why in cal.padlife.left]  # what the lot could not separate, and why
+        pl["warnings"] = list(cal.padlife.warnings)
         table["padlife"] = pl
     return table
 
