@@ -324,7 +324,9 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
         scratch.insert(root.cell_index(), li, grown)
         del grown, store
         # cells with no grown shape below them are dropped with their instances (most standard cells)
-        scratch.delete_cells([c.cell_index() for c in scratch.each_cell() if c.cell_index() != root.cell_index() and c.bbox(li).empty()])
+        empty = [c.cell_index() for c in scratch.each_cell() if c.cell_index() != root.cell_index() and c.bbox(li).empty()]
+        if empty:
+            scratch.delete_cells(empty)
         boxes = _Boxes(scratch, li)
         boxes.walk(root.cell_index(), np.eye(2), True, np.zeros((1, 2)), visit)
     except MemoryError as exc:
