@@ -461,3 +461,92 @@ def test_cli_fill_bad_input_exits_2_naming_the_option_and_writes_nothing(tmp_pat
         assert res.exit_code == 2, (args, res.output)
         assert text in res.output, (args, res.output)
         assert not out.exists(), args
+
+
+# ------------------------------------------------------------------------------ independent checks (KLayout)
+def hierarchical_chip(path):
+    """A 300 x 300 um chip of one small block placed many ways: arrays, 90-degree rotations, a mirror,
+    a 30-degree rotation, a magnification, placements overlapping each other; the leaf has a
+    Manhattan bar and a 45-degree triangle, and its placements in a row overlap."""
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    leaf = lib.new_cell("LEAF")
+    leaf.add(gdstk.rectangle((0, 0), (4 * NM, 1 * NM), layer=68, datatype=20))
+    leaf.add(gdstk.Polygon([(0, 2 * NM), (2 * NM, 2 * NM), (0, 4 * NM)], layer=68, datatype=20))
+    row = lib.new_cell("ROW")
+    row.add(gdstk.Reference(leaf, (0, 0), columns=6, rows=1, spacing=(3 * NM, 0)))  # overlapping leaves
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (300 * NM, 300 * NM), layer=235, datatype=4))
+    top.add(gdstk.Reference(row, (10 * NM, 10 * NM), columns=3, rows=4, spacing=(37 * NM, 23 * NM)))
+    top.add(gdstk.Reference(row, (11 * NM, 10.5 * NM)))  # on top of an array element
+    top.add(gdstk.Reference(row, (250 * NM, 20 * NM), rotation=math.pi / 2))
+    top.add(gdstk.Reference(row, (250 * NM, 120 * NM), rotation=math.pi, x_reflection=True))
+    top.add(gdstk.Reference(row, (150 * NM, 150 * NM), rotation=math.pi / 6))
+    top.add(gdstk.Reference(row, (60 * NM, 220 * NM), magnification=1.5, rotation=-math.pi / 2))
+    top.add(gdstk.rectangle((200 * NM, 200 * NM), (230 * NM, 260 * NM), layer=68, datatype=20))
+    lib.write_gds(str(path))
+    return path
+
+
+def test_fill_keeps_out_by_klayouts_own_checks(tmp_path):
+    """Every free site filled on a hierarchical chip, the fill file written and read back into the
+    layout by KLayout: KLayout's separation check (Euclidean) finds no square closer than the
+    keep-out to a drawn shape, none closer than the spacing to another, and the drawn shapes grown
+    by the box [-(keep-out - 1 nm), keep-out - 1 nm]^2 (their Minkowski sum) meet no square."""
+    path = hierarchical_chip(tmp_path / "hier.gds")
+    w = extract_windows(path, ["68/20"], 25 * UM)
+    s = fill_sites(path, ["68/20"], w, RULES)
+    chosen = select_fill(s, s.capacity)
+    out = write_fill(tmp_path / "fill.gds", s, chosen, "36/28")
+    ly = kdb.Layout()
+    ly.read(str(path))
+    ly.read(str(out))  # the fill merged into the layout: its cell becomes a second top cell
+    drawn = kdb.Region(ly.cell("TOP").begin_shapes_rec(ly.find_layer(68, 20)))
+    fill = kdb.Region(ly.cell("CMPSIM_FILL").begin_shapes_rec(ly.find_layer(36, 28)))
+    assert fill.count() == chosen.sum() > 5000
+    k = round(RULES.keepout / 1e-9)
+    assert drawn.separation_check(fill, k).is_empty()
+    assert fill.space_check(round(RULES.spacing / 1e-9)).is_empty()
+    assert (fill & drawn.minkowski_sum(kdb.Box(1 - k, 1 - k, k - 1, k - 1))).is_empty()  # Chebyshev distance too
+    # the keep-out is not padded on Manhattan shapes: some square sits within 1 um more of the drawn rectangle
+    assert not drawn.separation_check(fill, k + 1000).is_empty()
+    # and the same chip flattened gives the same sites
+    flat_lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    flat_lib.new_cell("TOP").add(*next(c for c in gdstk.read_gds(str(path), unit=1e-9).cells if c.name == "TOP").get_polygons())
+    flat_lib.write_gds(str(tmp_path / "flat.gds"))
+    np.testing.assert_array_equal(fill_sites(tmp_path / "flat.gds", ["68/20"], w, RULES).free, s.free)
+
+
+def test_a_square_exactly_at_the_keepout_from_two_shapes_is_free(tmp_path):
+    """Two bars exactly 2 keepout + size apart: the site between them, at exactly the keep-out from
+    both, is free, its neighbours are not (an odd square side in dbu, where half a square is not
+    a whole dbu)."""
+    rules = FillRules(2.001 * UM, 1.499 * UM, 2.5 * UM)
+    x = 749 + 2 * 3500  # the third lattice column of window 0
+    for left, right, free in ((0, 0, True), (1, 0, False), (0, -1, False)):  # then 1 nm closer on either side
+        lib = gdstk.Library(unit=1e-9, precision=1e-9)
+        top = lib.new_cell("TOP")
+        top.add(gdstk.rectangle((0, 0), (40 * NM, 40 * NM), layer=235, datatype=4))
+        top.add(gdstk.rectangle((0, 0), (x - 2500 + left, 40 * NM), layer=68, datatype=20))
+        top.add(gdstk.rectangle((x + 2001 + 2500 + right, 0), (40 * NM, 40 * NM), layer=68, datatype=20))
+        path = tmp_path / f"gap{left}{right}.gds"
+        lib.write_gds(str(path))
+        w = extract_windows(path, ["68/20"], 20 * UM)
+        s = fill_sites(path, ["68/20"], w, rules)
+        col = int(np.nonzero(s.cx == x)[0][0])
+        assert s.free.sum() == (s.free.shape[0] if free else 0)
+        assert s.free[:, col].all() == free
+
+
+def test_fill_file_places_patterns_as_arrays(chip, tmp_path):
+    """Windows with the same pattern share one cell, placed as arrays along x: fewer instances than windows."""
+    _, w, s = chip
+    chosen = select_fill(s, np.minimum(s.capacity, 3))
+    out = write_fill(tmp_path / "fill.oas", s, chosen, (36, 28))
+    ly = kdb.Layout()
+    ly.read(str(out))
+    topc = ly.cell("CMPSIM_FILL")
+    filled = int((chosen.reshape(s.shape[0], s.per_window, s.shape[1], s.per_window).sum(axis=(1, 3)) > 0).sum())
+    assert topc.child_instances() < filled
+    assert sum(1 for _ in topc.each_inst() if _.is_regular_array()) > 0
+    assert ly.dbu == pytest.approx(1e-3)
+    assert len(klayout_boxes(out)) == chosen.sum()
