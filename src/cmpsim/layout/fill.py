@@ -27,12 +27,13 @@ distance >= k is at Euclidean distance >= k too):
   polygon of H is cut into trapezoids (KLayout's decomposition; rectangles where H is
   Manhattan) and a site is blocked iff it lies in the closed bounding box of one of them.
   Exact on Manhattan shapes;
-* a drawn polygon with an oblique edge (e.g. SKY130's chamfered cell corners) is first
-  grown by 2 dbu more (KLayout's sizing moves each edge by the distance, so the grown
-  polygon holds the Euclidean disk growth, and the margin covers the rounding of oblique
-  vertices to the grid and the half-dbu of the closed test), and its trapezoids block as
-  their bounding boxes: conservative (never a square closer than ``keepout``, a few legal
-  sites lost near oblique edges).
+* a drawn polygon with an oblique edge (e.g. SKY130's chamfered cell corners) is added
+  as its Minkowski sum with the box [-(2s + E + 2), E + 2]^2 (KLayout's ``minkowski_sum``,
+  exact: its distance is the box's, Chebyshev, where ``sized`` moves an oblique edge by the
+  Euclidean distance only; the 2 more cover the half-dbu of the closed test), and its
+  trapezoids (whose corners on an oblique side are rounded to the grid) block as their
+  bounding boxes grown by 1: conservative (never a square closer than ``keepout``, a few
+  legal sites lost near oblique edges).
 
 **Cost.** H stays hierarchical: KLayout's deep region is inserted into a scratch layout
 (a cell per cell of the die where the grown shapes live), each cell's own trapezoids are
