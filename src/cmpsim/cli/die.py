@@ -120,9 +120,10 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
                 rules, fill_pair = resolve_fill(list(layers), pdk, layer_map, fill_layer, **lengths)
                 rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
                 options = {k: v for k, v in kwargs.items() if k not in ("cell_size", "process")}
-                result, plan, fill_file = fill_die(layout, list(layers), window if window is not None else 20e-6, rules, fill_pair,
-                                                   top=top, pdk=pdk, layer_map=layer_map, config=cfg, process=process,
-                                                   blanket_rate=rate, time=t, with_file=bool(out_dir), **options)
+                with extraction_bar() as told:
+                    result, plan, fill_file = fill_die(layout, list(layers), window if window is not None else 20e-6, rules, fill_pair,
+                                                       top=top, pdk=pdk, layer_map=layer_map, config=cfg, process=process,
+                                                       blanket_rate=rate, time=t, with_file=bool(out_dir), progress=told, **options)
             else:
                 with extraction_bar() as told:
                     layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk,

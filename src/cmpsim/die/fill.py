@@ -288,7 +288,7 @@ def plan_fill(windows, sites, *, model=None, time: float | None = None, config=N
 
 def fill_die(layout, layers, window: float, rules, fill_layer, *, top: str | None = None, pdk: str | None = None,
              layer_map=None, config=None, process: str = "oxide", blanket_rate: float | None = None,
-             time: float | None = None, with_file: bool = True, **model_options):
+             time: float | None = None, with_file: bool = True, progress=None, **model_options):
     """The model-based fill of a real layout, as ``cmpsim die LAYOUT --fill`` runs it.
 
     Reads ``layout`` (a path or a :class:`cmpsim.layout.Layout`), extracts the windows of ``layers``
@@ -299,7 +299,8 @@ def fill_die(layout, layers, window: float, rules, fill_layer, *, top: str | Non
     ``planarization_length``). ``fill_layer`` the fill's (layer, datatype). Returns (the filled
     die's result with its JSON ``fill`` object, the :class:`FillPlan`, the fill file's name:
     ``fill.oas`` for an OASIS layout, else ``fill.gds``; ``file`` in the object only
-    ``with_file``). ValueError naming the option for a missing file or bad input.
+    ``with_file``). ``progress`` a callable told (stage, done, total) by the extraction. ValueError
+    naming the option for a missing file or bad input.
     """
     from dataclasses import replace
 
@@ -313,7 +314,7 @@ def fill_die(layout, layers, window: float, rules, fill_layer, *, top: str | Non
             layout = read_layout(layout)
         except FileNotFoundError as exc:
             raise ValueError(str(exc)) from None
-    windows = extract_windows(layout, layers, window, top=top, pdk=pdk, layer_map=layer_map)
+    windows = extract_windows(layout, layers, window, top=top, pdk=pdk, layer_map=layer_map, progress=progress)
     sites = fill_sites(layout, layers, windows, rules, top=top, pdk=pdk, layer_map=layer_map)
     model = DieModel(config, process, blanket_rate=blanket_rate, **model_options)
     plan = plan_fill(windows, sites, model=model, time=time)
