@@ -550,3 +550,13 @@ def test_fill_file_places_patterns_as_arrays(chip, tmp_path):
     assert sum(1 for _ in topc.each_inst() if _.is_regular_array()) > 0
     assert ly.dbu == pytest.approx(1e-3)
     assert len(klayout_boxes(out)) == chosen.sum()
+
+
+def test_a_lattice_too_large_for_the_machine_is_refused_naming_the_options(chip, monkeypatch):
+    import cmpsim.layout.fill as layout_fill
+    from cmpsim.layout import LayoutTooLarge
+
+    path, w, s = chip
+    monkeypatch.setattr(layout_fill, "MAX_SITES", s.free.size - 1)
+    with pytest.raises(LayoutTooLarge, match="--fill-size"):
+        fill_sites(path, ["68/20"], w, RULES)

@@ -45,7 +45,7 @@ difference array (four additions per box, one cumulative sum), vectorised.  Grow
 merging by KLayout is what keeps a whole chip fast: the grown shapes of a standard-cell
 macro merge into a few polygons, whatever its cell count.  (Subtracting H from the die's box
 and reading the free region instead would flatten it: 68 s on a 20 mm stepped chip where
-this takes 3 s.)
+this takes 5-8 s.)
 
 Only numpy and KLayout (``klayout.db``) are imported, and cmpsim.layout; see docs/fill.md.
 """
