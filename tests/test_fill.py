@@ -560,3 +560,36 @@ def test_a_lattice_too_large_for_the_machine_is_refused_naming_the_options(chip,
     monkeypatch.setattr(layout_fill, "MAX_SITES", s.free.size - 1)
     with pytest.raises(LayoutTooLarge, match="--fill-size"):
         fill_sites(path, ["68/20"], w, RULES)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_oblique_shapes_and_placements_keep_out(tmp_path, seed):
+    """Random triangles and quadrilaterals at any angle, placed at any rotation, mirrored, magnified,
+    overlapping: every free site filled keeps the keep-out by KLayout's separation check (Euclidean)
+    and its box distance (Minkowski sum), and odd rules in dbu change nothing."""
+    rng = np.random.default_rng(seed)
+    rules = FillRules(1.001 * UM, 0.999 * UM, 1.237 * UM)
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    cell = lib.new_cell("C")
+    for _ in range(6):
+        pts = rng.uniform(0, 12 * NM, size=(int(rng.integers(3, 5)), 2)).round()
+        cell.add(gdstk.Polygon(pts, layer=68, datatype=20))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (150 * NM, 150 * NM), layer=235, datatype=4))
+    for _ in range(8):
+        top.add(gdstk.Reference(cell, tuple(rng.uniform(10 * NM, 130 * NM, 2).round()), rotation=float(rng.uniform(0, 2 * math.pi)),
+                                magnification=float(rng.choice([1.0, 1.0, 1.7])), x_reflection=bool(rng.integers(2))))
+    path = tmp_path / "random.gds"
+    lib.write_gds(str(path))
+    w = extract_windows(path, ["68/20"], 15 * UM)
+    s = fill_sites(path, ["68/20"], w, rules)
+    out = write_fill(tmp_path / "fill.gds", s, select_fill(s, s.capacity), "36/28")
+    ly = kdb.Layout()
+    ly.read(str(path))
+    ly.read(str(out))
+    drawn = kdb.Region(ly.cell("TOP").begin_shapes_rec(ly.find_layer(68, 20)))
+    fill = kdb.Region(ly.cell("CMPSIM_FILL").begin_shapes_rec(ly.find_layer(36, 28)))
+    k = 1237
+    assert fill.count() > 500
+    assert drawn.separation_check(fill, k).is_empty()
+    assert (fill & drawn.minkowski_sum(kdb.Box(1 - k, 1 - k, k - 1, k - 1))).is_empty()
