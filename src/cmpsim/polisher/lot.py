@@ -327,17 +327,15 @@ def run_lot(
         setup, pad_state, estimator, zones, feedback, solves = _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base,
                                                                           time_step, qualification, life_model, between_wafers, cache,
                                                                           weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior)
-        records, start = [], 0
+        saved = LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones), [], solves)
         if checkpoint is not None:
-            write_checkpoint(checkpoint, LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator),
-                                                       _dict(zones), [], solves))
-    else:
-        setup, start, solves = saved.setup, saved.next_wafer, saved.solves
-        pad_state = pad_state_from_dict(saved.pad_state)
-        estimator = None if saved.estimator is None else estimator_from_dict(saved.estimator)
-        zones = None if saved.zones is None else ZoneState.from_dict(saved.zones)
-        feedback = None if setup["feedback"] is None else _feedback_from_dict(setup["feedback"])
-        records = [WaferRecord.from_dict(r) for r in saved.records]
+            write_checkpoint(checkpoint, saved)
+    # the lot always goes on from the checkpoint's numbers, resumed or not, so that both run the same
+    # arithmetic on the same arrays (a matrix product's last bit can depend on its operands' layout)
+    setup, start, solves = saved.setup, saved.next_wafer, saved.solves
+    pad_state, estimator, zones = _restore(saved)
+    feedback = None if setup["feedback"] is None else _feedback_from_dict(setup["feedback"])
+    records = [WaferRecord.from_dict(r) for r in saved.records]
 
     radius = np.asarray(setup["radius"], dtype=float)
     weights = np.asarray(setup["weights"], dtype=float)
@@ -391,9 +389,11 @@ def run_lot(
             estimator = estimator.update(removed / total_time / factor, age)
             if feedback is not None:
                 zones = feedback.learn(zones, pressures, (inc - final) / total_time)
+        saved = LotCheckpoint(inputs, k + 1, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones),
+                              [r.to_record() for r in records], solves)
         if checkpoint is not None:
-            write_checkpoint(checkpoint, LotCheckpoint(inputs, k + 1, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones),
-                                                       [r.to_record() for r in records], solves))
+            write_checkpoint(checkpoint, saved)
+        pad_state, estimator, zones = _restore(saved)
         if after_wafer is not None:
             after_wafer(record)
     return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves,
@@ -433,6 +433,13 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
         if done:
             break
     return predicted, t, with_time(t)
+
+
+def _restore(saved: LotCheckpoint):
+    """The pad, the rate estimator and the zone state of a checkpoint."""
+    estimator = None if saved.estimator is None else estimator_from_dict(saved.estimator)
+    zones = None if saved.zones is None else ZoneState.from_dict(saved.zones)
+    return pad_state_from_dict(saved.pad_state), estimator, zones
 
 
 def _dict(state):
