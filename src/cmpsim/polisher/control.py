@@ -136,7 +136,8 @@ class DoubleEWMA:
     def __post_init__(self):
         _check_weight("weight", self.weight)
         _check_weight("drift_weight", self.drift_weight)
-        _check_rate(self.level, "the first rate estimate")
+        if not math.isfinite(self.level):
+            raise ValueError(f"level must be a finite rate (m/s); got {self.level!r}")
         if self.clock not in CLOCKS:
             raise ValueError(f"clock must be one of {CLOCKS}; got {self.clock!r}")
         for name in ("drift", "age"):
@@ -180,6 +181,7 @@ def make_estimator(name: str, rate: float, weight: float = WEIGHT, drift_weight:
         raise ValueError(f"clock must be one of {CLOCKS}; got {clock!r}")
     if drift_prior not in DRIFT_PRIORS:
         raise ValueError(f"drift_prior must be one of {DRIFT_PRIORS}; got {drift_prior!r}")
+    _check_rate(rate, "the first rate estimate")
     if ESTIMATORS[name] is DoubleEWMA:
         drift = float(rate) / float(age) if (drift_prior == "model" and clock == "glazing" and age > 0) else 0.0
         return DoubleEWMA(level=float(rate), drift=drift, weight=weight, drift_weight=drift_weight, clock=clock, age=float(age))
