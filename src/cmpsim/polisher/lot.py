@@ -17,11 +17,16 @@ EWMA's rate estimate. The pad they polished (warmed, worn, conditioned) is the p
 
 The incoming thickness of the top film varies from wafer to wafer
 (:func:`cmpsim.polisher.incoming.incoming_profiles`, reproducible with ``seed``), or is given.
-With ``control = "ewma"`` the run-to-run controller (:mod:`cmpsim.polisher.control`) sets each
-wafer's polish time of the recipe's last timed step from its estimated rate and the incoming
-thickness measured before the wafer (feed-forward), and, on a zoned membrane head, its zone
-pressures from the last wafer's post-polish profile through the head's zone response (feedback),
-computed once for the lot at its starting pressures.
+With ``control = "ewma"`` (the double EWMA) or ``"single_ewma"`` the run-to-run controller sets each
+wafer's polish time of the recipe's last timed step from the rate its estimator
+(:mod:`cmpsim.polisher.control`) predicts for the wafer's pad age and the incoming thickness
+measured before the wafer (feed-forward, eq. C0), and, on a zoned membrane head, its zone
+pressures through the head's zone response, computed once for the lot at its starting pressures,
+taking only steps predicted to lower the non-uniformity (:mod:`cmpsim.polisher.zones`).
+
+With ``checkpoint`` the lot's state is written atomically after its set-up and after every wafer
+(:mod:`cmpsim.polisher.checkpoint`); ``resume`` goes on from it with results identical to the
+uninterrupted lot. The lot always continues from the checkpoint's numbers, resumed or not.
 """
 
 from __future__ import annotations
