@@ -15,6 +15,7 @@ from .group import _rich_table, command_errors, main
 @click.option("--weight", type=float, default=0.3, show_default=True, help="lambda_1, the EWMA weight of the rate's level, in (0, 1].")
 @click.option("--drift-weight", "drift_weight", type=float, default=0.3, show_default=True, help="lambda_2, the double EWMA's weight of the rate's drift per wafer, in (0, 1].")
 @click.option("--drift-clock", "clock", type=click.Choice(["glazing", "wafer"]), default="glazing", show_default=True, help="The double EWMA's pad-age clock: the drift per unit of the pad-life model's glazing factor over the wafer, or per wafer (Butler & Stefani's per run).")
+@click.option("--drift-prior", "drift_prior", type=click.Choice(["model", "none"]), default="model", show_default=True, help="The double EWMA's first drift on the glazing clock: the pad-life model's (the rate proportional to the glazing factor) or none (learnt from the wafers).")
 @click.option("--zone-weight", "zone_weight", type=float, default=0.5, show_default=True, help="lambda_z, the EWMA weight of the removal profile's shape, in (0, 1].")
 @click.option("--zone-feedback/--no-zone-feedback", "zone_feedback", default=True, show_default=True, help="With control on a zoned head, set the zone pressures (only steps the zone response predicts lower the non-uniformity).")
 @click.option("--seed", type=int, default=None, help="Seed of the incoming thickness draw (2 % spread of the mean, 1 % tilt, 1 sigma): the same seed, the same lot.")
@@ -25,7 +26,7 @@ from .group import _rich_table, command_errors, main
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): wafers [{index, polish_time (s), removal_rate_mean (m/s), final_thickness_mean (m), final_thickness_nonuniformity (fraction), zone_pressures (Pa), ...}], target, units.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, metavar="DIR", help="Write lot.json, lot.csv and the lot plot lot.png into DIR, and the checkpoint lot.checkpoint.json after every wafer.")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out DIR (an interrupted lot, even killed with -9): the same results as without the interruption. Refused if the checkpoint's inputs differ; without a checkpoint the lot starts.")
-def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clock, zone_weight, zone_feedback, seed, idle_time, qualification, worn_summits,
+def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clock, drift_prior, zone_weight, zone_feedback, seed, idle_time, qualification, worn_summits,
                 assignments, as_json, out_dir, resume):
     """Polish a lot of wafers of RECIPE.toml in sequence on one pad that warms, glazes and is conditioned.
 
@@ -52,7 +53,7 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
         idle = to_si(idle_time, "s", "--idle-time", example="s")
         result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle,
                          qualification=qualification, worn_summits=worn_summits, weight=weight, drift_weight=drift_weight,
-                         zone_weight=zone_weight, zone_feedback=zone_feedback, clock=clock,
+                         zone_weight=zone_weight, zone_feedback=zone_feedback, clock=clock, drift_prior=drift_prior,
                          checkpoint=None if out_dir is None else Path(out_dir) / NAME, resume=resume)
     if out_dir is not None:
         write_lot(result, out_dir)
