@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import click
 
+from ..polisher.control import CLOCKS, CONTROL, DRIFT_PRIORS, DRIFT_WEIGHT, WEIGHT
 from .group import _rich_table, command_errors, main
 
 
@@ -11,11 +12,11 @@ from .group import _rich_table, command_errors, main
 @click.argument("recipe", type=click.Path(dir_okay=False))
 @click.option("--wafers", type=click.IntRange(min=1), default=25, show_default=True, help="Number of wafers polished in sequence on one pad.")
 @click.option("--conditioning", type=click.Choice(["none", "ex_situ", "in_situ"]), default=None, help="The diamond disk: never, between wafers, or while polishing. Default: the recipe's conditioning, else in_situ.")
-@click.option("--control", type=click.Choice(["none", "ewma", "single_ewma"]), default="none", show_default=True, help="Run-to-run control: ewma, the double EWMA (rate and its drift, Butler & Stefani 1994), or single_ewma (the rate only), sets each wafer's polish time (feed-forward) and, on a zoned head, the zone feedback its zone pressures.")
-@click.option("--weight", type=float, default=0.3, show_default=True, help="lambda_1, the EWMA weight of the rate's level, in (0, 1].")
-@click.option("--drift-weight", "drift_weight", type=float, default=0.3, show_default=True, help="lambda_2, the double EWMA's weight of the rate's drift per wafer, in (0, 1].")
-@click.option("--drift-clock", "clock", type=click.Choice(["glazing", "wafer"]), default="glazing", show_default=True, help="The double EWMA's pad-age clock: the drift per unit of the pad-life model's glazing factor over the wafer, or per wafer (Butler & Stefani's per run).")
-@click.option("--drift-prior", "drift_prior", type=click.Choice(["model", "none"]), default="model", show_default=True, help="The double EWMA's first drift on the glazing clock: the pad-life model's (the rate proportional to the glazing factor) or none (learnt from the wafers).")
+@click.option("--control", type=click.Choice(CONTROL), default="none", show_default=True, help="Run-to-run control: ewma, the double EWMA (rate and its drift, Butler & Stefani 1994), or single_ewma (the rate only), sets each wafer's polish time (feed-forward) and, on a zoned head, the zone feedback its zone pressures.")
+@click.option("--weight", type=float, default=WEIGHT, show_default=True, help="lambda_1, the EWMA weight of the rate's level, in (0, 1].")
+@click.option("--drift-weight", "drift_weight", type=float, default=DRIFT_WEIGHT, show_default=True, help="lambda_2, the double EWMA's weight of the rate's drift (per unit of pad age), in (0, 1].")
+@click.option("--drift-clock", "clock", type=click.Choice(CLOCKS), default="glazing", show_default=True, help="The double EWMA's pad-age clock: the drift per unit of the pad-life model's glazing factor over the wafer, or per wafer (Butler & Stefani's per run).")
+@click.option("--drift-prior", "drift_prior", type=click.Choice(DRIFT_PRIORS), default="model", show_default=True, help="The double EWMA's first drift on the glazing clock: the pad-life model's (the rate proportional to the glazing factor) or none (learnt from the wafers).")
 @click.option("--zone-weight", "zone_weight", type=float, default=0.5, show_default=True, help="lambda_z, the EWMA weight of the removal profile's shape, in (0, 1].")
 @click.option("--zone-feedback/--no-zone-feedback", "zone_feedback", default=True, show_default=True, help="With control on a zoned head, set the zone pressures (only steps the zone response predicts lower the non-uniformity).")
 @click.option("--seed", type=int, default=None, help="Seed of the incoming thickness draw (2 % spread of the mean, 1 % tilt, 1 sigma): the same seed, the same lot.")
