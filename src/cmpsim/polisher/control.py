@@ -3,7 +3,7 @@
 The lot sets each wafer's polish time from the thickness measured before the wafer and the rate
 an estimator predicts for it (feed-forward, eq. C0); after the wafer the estimator learns the
 rate the wafer had (``removed / time``). The estimators are a small family behind one protocol,
-:class:`RateEstimator` (``predict()``, ``update(rate)``, ``to_dict()``), picked by name in one
+:class:`RateEstimator` (``predict(age)``, ``update(rate, age)``, ``to_dict()``), picked by name in one
 place, :data:`ESTIMATORS` / :func:`make_estimator`:
 
 ``"single_ewma"`` (:class:`SingleEWMA`): the EWMA controller of Sachs, Hu and Ingolfsson (IEEE
@@ -15,20 +15,23 @@ process gain (the rate), the lot's controller of issue 32::
 A single EWMA lags a drifting process: for r_k = r_0 + delta k its prediction settles at
 r_(k+1) - delta / lambda_1 (the pad glazes and the estimate chases it; Chen & Guo 2001).
 
-``"ewma"`` (:class:`DoubleEWMA`, the default of ``cmpsim lot --control ewma``): the double EWMA,
-the predictor-corrector controller (PCC) of Butler & Stefani (IEEE Trans. Semicond. Manuf. 7
-(1994) 193) in the form analysed by Del Castillo (1999) and used for CMP by Chen & Guo (IEEE
-Trans. Semicond. Manuf. 14 (2001) 19): a level and a drift per wafer,
+``"ewma"`` (:class:`DoubleEWMA`, the default of ``cmpsim lot --control ewma``): the double EWMA, a
+level a and a drift D per unit of pad age A (the predictor-corrector controller, PCC, of Butler &
+Stefani, IEEE Trans. Semicond. Manuf. 7 (1994) 193, estimates the same two; Chen & Guo, IEEE Trans.
+Semicond. Manuf. 14 (2001) 19, take the drift per unit of pad age for CMP). The level is carried
+forward by the drift (Holt's form), which makes it exact at any age spacing::
 
-    a_k = lambda_1 r_k + (1 - lambda_1) a_(k-1)                                          (C2)
-    D_k = lambda_2 (r_k - a_(k-1)) + (1 - lambda_2) D_(k-1)                             (C3)
-    predicted rate for wafer k+1:  a_k + D_k                                             (C4)
+    a_k = lambda_1 r_k + (1 - lambda_1) (a_(k-1) + D_(k-1) dA_k)                       (C2)
+    D_k = lambda_2 (a_k - a_(k-1)) / dA_k + (1 - lambda_2) D_(k-1)      (dA_k != 0)   (C3)
+    predicted rate of a wafer of age A:  a_k + D_k (A - A_k)                            (C4)
 
-On a linear drift r_k = r_0 + delta k the level lags by delta (1 - lambda_1)/lambda_1, the drift
-settles at delta / lambda_1 (r_k - a_(k-1) = delta + delta (1 - lambda_1)/lambda_1), and the
-prediction a_k + D_k = r_k + delta = r_(k+1): no steady-state offset (tests/test_lot_control.py
-checks it on a synthetic process, analytically). Chen & Guo's age-based variant (the drift per
-unit of pad age rather than per wafer) is not implemented.
+On a drift linear in the age, r = r_0 + delta A, a_k = r_k and D_k = delta is a fixed point of
+C2-C3 whatever the spacing dA_k, so the prediction has no steady-state offset
+(tests/test_lot_control.py checks it on a synthetic process, with unit and random age steps).
+The age is the wafer's on a ``clock`` (:data:`CLOCKS`): "glazing", the pad-life model's rate
+factor averaged over the wafer (docs/polisher.md, eq. L4), or "wafer", its index (the PCC's per
+run). The first drift (C5, ``drift_prior``): "model", on the glazing clock, D_0 = a_0 / A_0 (the
+rate proportional to the glazing factor, what the pad-life model says), or "none", D_0 = 0.
 
 Weights: lambda_1 = 0.3, the lot's single-EWMA weight since issue 32 (the common textbook value,
 chosen before any lot ran); lambda_2 = 0.3, the same constant for the drift as for the level, as
@@ -52,7 +55,7 @@ from dataclasses import asdict, dataclass, replace
 from typing import Protocol, runtime_checkable
 
 __all__ = ["RateEstimator", "SingleEWMA", "DoubleEWMA", "ESTIMATORS", "CONTROL", "make_estimator", "estimator_from_dict",
-           "feed_forward_time", "WEIGHT", "DRIFT_WEIGHT", "CLOCKS"]
+           "feed_forward_time", "WEIGHT", "DRIFT_WEIGHT", "CLOCKS", "DRIFT_PRIORS"]
 
 #: lambda_1 of eqs. C1/C2: the lot's EWMA weight since issue 32 (Sachs et al. 1995; Boning et al. 1999; chosen before any lot ran).
 WEIGHT = 0.3

@@ -17,9 +17,11 @@ w_i are the rings' shares of the wafer area (sum 1), A_k the zones' areas.
   NU(dP) = std_w(f) / mean_w(f) (mean_w(f) = T).
 - (Z3) The step: the area-weighted least squares of Z2 linearised, s ~ h + rho' dP with
   rho' = rho - h (w . rho): min |e - (mean(t_in) - T) rho' dP|_w^2 + alpha |dP|^2, e = f(0) - T,
-  keeping the load (sum_k A_k dP_k = 0: a uniform change of the zones moves the mean rate, which
-  is the polish time's to set, and barely the shape), alpha = ``regularisation`` x trace/zones
-  (neighbouring zones' responses overlap: docs/model.md 13f), within ``bounds``.
+  alpha = ``regularisation`` x trace/zones (neighbouring zones' responses overlap: docs/model.md
+  13f), within ``bounds``. With ``keep_load`` the step also keeps the load (sum_k A_k dP_k = 0, issue
+  32's constraint); by default it does not: on the grooved 300mm preset the zones' common mode
+  against the retaining ring is what shapes the 140-150 mm band, and the mean rate it moves is the
+  polish time's to follow (Z6).
 - (Z4) **Only a step predicted to lower the non-uniformity is taken**: NU(dP) of Z2 (the exact
   shape of Z1, not the linearisation) must be below NU(0) (the current pressures); otherwise the
   step is halved, up to ``halvings`` times, and refused if none lowers it: the pressures stay.
@@ -108,8 +110,8 @@ class ZoneFeedback:
 
     ``response`` J (rings x zones, m/s/Pa) at ``start_pressures`` P_0 (Pa), ``mean_rate`` m_J (m/s)
     of that solve, ``weights`` w (rings' area shares), ``zone_areas`` A_k (m^2), ``zone_weight``
-    lambda_z in (0, 1], ``bounds`` (Pa), ``regularisation`` (relative Tikhonov weight) and the
-    number of ``halvings`` tried before a step is refused."""
+    lambda_z in (0, 1], ``bounds`` (Pa), ``regularisation`` (relative Tikhonov weight), the
+    number of ``halvings`` tried before a step is refused, and ``keep_load`` (sum_k A_k dP_k = 0)."""
 
     response: np.ndarray
     start_pressures: tuple
