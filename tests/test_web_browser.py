@@ -334,7 +334,7 @@ def test_the_die_view_uploads_a_layout_and_shows_the_three_maps_and_the_hotspots
     page.check('#die-pdk-layers input[value="met2"]')
     page.click("#run-die")
     page.wait_for_selector("#die-message:not([hidden])")
-    assert "layer 'met2' (69/20, 41/28) is not in chip.gds; its layers are: 1/0" in page.text_content("#die-message")
+    assert "--layer 'met2' (69/20, 41/28) is not in chip.gds; its layers are: 1/0" in page.text_content("#die-message")
     assert page.get_attribute("#die-layers", "aria-invalid") == "true"
     # the chip's own layer, copper, two limits
     page.uncheck('#die-pdk-layers input[value="met2"]')

@@ -32,7 +32,12 @@ import numpy as np
 
 from ..inputs.config import Config
 from ..validation import _as_datasets
-from .request import CALIBRATABLE, CalibrationError, _positive, check_data, default_bounds, fit_bounds, free_names, inside, start_config
+from ..inputs.config import PARAMETERS
+from .heldout import series_loo
+from .identify import choose, separability
+from .registry import candidates
+from .request import (CALIBRATABLE, CalibrationError, check_data, default_bounds, fit_bounds, fit_scale_of, fitted_in_log, free_names, inside,
+                      required_settings, start_config)
 from .residuals import FAILED_POINT_PENALTY, _point_rows, _Problem
 from .result import CalibrationResult
 from .uncertainty import central_jacobian, uncertainty
@@ -50,7 +55,7 @@ def __getattr__(name: str):
 
 def calibrate(
     data,
-    free,
+    free=None,
     config: Config | None = None,
     bounds: dict[str, tuple[Any, Any]] | None = None,
     grid: str | None = None,
@@ -59,19 +64,24 @@ def calibrate(
     progress: bool = False,
     include_model_predictions: bool = False,
 ) -> CalibrationResult:
-    """Fit the ``free`` inputs to the data with bounded least squares.
+    """Fit inputs to the data with bounded least squares; without ``free`` the data choose them.
 
     Parameters
     ----------
     data : path, Dataset, or a sequence of them
         Data files in the format of ``cmpsim/data/README.md``.
-    free : str or sequence of str
-        Names of the inputs to fit (see ``cmpsim params``), e.g. ``["asperity_density"]``.
+    free : str or sequence of str, optional
+        Names of the inputs to fit (see ``cmpsim params``), e.g. ``["asperity_density"]``. None (or
+        empty): the data's quantities choose the inputs they can identify
+        (:mod:`cmpsim.calibration.registry`: removal rates of a film -> its chemistry constants k_F,
+        R_c,F, B_F), keeping those the Jacobian at the start can separate with one degree of freedom
+        left (:func:`cmpsim.calibration.identify.choose`); ``CalibrationResult.choice`` says which and why.
     config : Config, optional
         Starting configuration (default :meth:`Config.default`); the other inputs stay fixed.
     bounds : dict, optional
         ``{name: (low, high)}`` with units (``"50 MPa"``) or SI numbers; default a factor 10
-        either side of the start for positive inputs, clipped to the valid range.
+        either side of the start for positive inputs, clipped to the valid range; for the film
+        chemistry's constants (fitted linearly) from 0 to 100 typical values.
     grid : str, optional
         Grid preset overriding ``config``'s.
     start : dict, optional
@@ -92,22 +102,34 @@ def calibrate(
     ------
     CalibrationError
         Unknown or non-fittable name, a name set per point by the data, bad bounds, no
-        degrees of freedom, or no equilibrium at the start.
+        degrees of freedom, data that choose no input, or no equilibrium at the start.
     """
     from scipy.optimize import least_squares
 
     t0 = time.perf_counter()
-    free = free_names(free)
     datasets = _as_datasets(data)
+    original = config or Config.default()
+    if grid is not None:
+        original = original.replace(grid=grid)
+    choice = None
+    if free is None or (not isinstance(free, str) and len(list(free)) == 0):
+        if start or bounds:
+            raise CalibrationError("start values and bounds name free inputs: give --free with them, or neither")
+        check_data(datasets, [], include_model_predictions)
+        choice, free = _choose_free(datasets, original)
+    free = free_names(free)
     check_data(datasets, free, include_model_predictions)
-    base = start_config(config, grid, start, free)
+    settings = {k: v for n in free for k, v in required_settings(n).items()}
+    original = original.replace(**settings) if settings else original
+    base = start_config(original, None, start, free)
     # the request: start values, how each is fitted, bounds; the start strictly inside them
     start_vals = {n: float(getattr(base, n)) for n in free}
-    log = {n: _positive(n) and start_vals[n] > 0 for n in free}
-    scale = {n: max(abs(start_vals[n]), 1e-12) if not log[n] else 1.0 for n in free}
+    log = {n: fitted_in_log(n, start_vals[n]) for n in free}
+    scale = {n: fit_scale_of(n, start_vals[n]) if not log[n] else 1.0 for n in free}
     bnds = fit_bounds(free, bounds, start_vals, log)
+    before_config = base
     for n in free:
-        v = inside(start_vals[n], bnds[n], log[n])
+        v = inside(start_vals[n], bnds[n], log[n], PARAMETERS[n].linear)
         if v != start_vals[n]:
             start_vals[n] = v
             base = base.replace(**{n: v})
@@ -117,9 +139,9 @@ def calibrate(
     dof = n_pts - len(free) - n_shape
     if dof < 0:
         raise CalibrationError(f"{n_pts} points cannot determine {len(free)} parameters plus {n_shape} shape scale(s)")
-    # before: the model at the start
-    z0 = np.zeros(len(free))
-    m0, res0, st0 = problem.model(z0)
+    # before: the model as given (the start moved inside the bounds only for the fit)
+    z_before = problem.z_of({n: float(getattr(before_config, n)) for n in free}) if before_config is not base else np.zeros(len(free))
+    m0, res0, st0 = problem.model(z_before)
     if not np.isfinite(m0).all():
         bad = [f"{ds.name} line {p.line}" for (ds, p), v in zip(problem.points, m0) if not np.isfinite(v)]
         raise CalibrationError(f"no equilibrium at the starting values for {', '.join(bad)}")
@@ -131,10 +153,13 @@ def calibrate(
 
         console = Console(stderr=True)
         problem.callback = lambda k, c: console.print(f"  evaluation {k}: chi-square {c:.6g}", highlight=False)
+    lower = problem.z_of({n: bnds[n][0] for n in free})
+    upper = problem.z_of({n: bnds[n][1] for n in free})
+    z0 = np.zeros(len(free))
     fit = least_squares(
         problem,
         z0,
-        bounds=(problem.z_of({n: bnds[n][0] for n in free}), problem.z_of({n: bnds[n][1] for n in free})),
+        bounds=(lower, upper),
         jac="2-point",
         diff_step=1e-3,
         x_scale=1.0,
@@ -146,7 +171,7 @@ def calibrate(
     z = fit.x
     problem.callback = None
     # after: uncertainty at the optimum, then the model there
-    J = central_jacobian(problem, z, n_pts)
+    J = central_jacobian(problem, z, n_pts, lower=lower, upper=upper)
     m1, res1, st1 = problem.model(z)
     r1 = problem.whiten(m1)
     chi2 = float(np.sum(r1 * r1))
@@ -155,12 +180,22 @@ def calibrate(
     failed = int((~np.isfinite(m1)).sum())
     if failed:
         unc.notes.append(f"{failed} point(s) have no equilibrium at the fitted values (penalised with a residual of {FAILED_POINT_PENALTY:g})")
+    separations, singular = separability(J, list(free), unc.correlation)
+    fitted = problem.config_of(z)
+    loo = []
+    idx = 0
+    for ds in datasets:  # leave one out on each removal series: the film chemistry refitted without the point
+        n = len(ds.points)
+        one = series_loo(ds, res1[idx : idx + n], fitted, list(m1[idx : idx + n]))
+        if one is not None:
+            loo.append(one)
+        idx += n
     return CalibrationResult(
         free=list(free),
-        config=problem.config_of(z),
-        initial_config=base,
+        config=fitted,
+        initial_config=before_config,
         values=values,
-        initial=dict(start_vals),
+        initial={n: float(getattr(before_config, n)) for n in free},
         stderr=unc.stderr,
         ci95=unc.ci95,
         correlation=unc.correlation,
@@ -181,4 +216,33 @@ def calibrate(
         elapsed_s=time.perf_counter() - t0,
         failed_points_after=failed,
         notes=unc.notes,
+        choice=choice,
+        identifiability=separations,
+        singular_values=singular,
+        loo=loo,
+        data=[str(d.path or d.name) for d in datasets],
+        settings=settings,
     )
+
+
+def _choose_free(datasets, config: Config):
+    """The inputs the data choose (:mod:`cmpsim.calibration.registry`), kept if the Jacobian at the start separates them."""
+    cands, notes = candidates(datasets, config)
+    if not cands:
+        raise CalibrationError("the data choose no input to fit" + (": " + "; ".join(notes) if notes else "") + "; give --free NAME ...")
+    names = [c.name for c in cands]
+    settings = {k: v for c in cands for k, v in c.settings}
+    base = config.replace(**settings) if settings else config
+    start_vals = {n: float(getattr(base, n)) for n in names}
+    log = {n: fitted_in_log(n, start_vals[n]) for n in names}
+    scale = {n: fit_scale_of(n, start_vals[n]) if not log[n] else 1.0 for n in names}
+    bnds = {n: default_bounds(n, start_vals[n]) for n in names}
+    problem = _Problem(datasets, base, names, start_vals, log, scale)
+    n_pts = len(problem.points)
+    n_shape = sum(1 for d in datasets if d.comparison == "shape")
+    J = central_jacobian(problem, np.zeros(len(names)), n_pts, lower=problem.z_of({n: bnds[n][0] for n in names}), upper=problem.z_of({n: bnds[n][1] for n in names}))
+    choice = choose(J, names, [c.why for c in cands], max(n_pts - n_shape - 1, 0))
+    choice.notes = notes
+    if not choice.names:
+        raise CalibrationError("the data identify none of the inputs they could choose: " + "; ".join(why for _, why in choice.left))
+    return choice, choice.names

@@ -12,7 +12,7 @@ from typing import Any
 from ..inputs.config import PARAMETERS, Config, parse_value
 from ..validation import Dataset
 
-__all__ = ["CALIBRATABLE", "CalibrationError", "default_bounds"]
+__all__ = ["CALIBRATABLE", "CalibrationError", "default_bounds", "fitted_in_log", "fit_scale_of", "required_settings"]
 
 
 def _calibratable(name: str) -> bool:
@@ -33,9 +33,35 @@ def _positive(name: str) -> bool:
     return p.low is not None and p.low >= 0.0
 
 
+def fitted_in_log(name: str, start: float) -> bool:
+    """Whether ``name`` is fitted as z = ln(value / start): a positive input with a positive start whose
+    outputs are not linear in it (the film chemistry's constants are fitted linearly)."""
+    return _positive(name) and start > 0 and not PARAMETERS[name].linear
+
+
+def fit_scale_of(name: str, start: float) -> float:
+    """The scale of a linearly fitted input's variable z = (value - start) / scale (SI)."""
+    typical = PARAMETERS[name].typical
+    return max(abs(start), typical or 0.0, 1e-12)
+
+
+def required_settings(name: str) -> dict:
+    """The model choices an input needs to act: the film chemistry's constants need ``film_chemistry = 'additive'``."""
+    from ..physics.chemistry import input_names
+    from ..physics.materials import FILMS
+
+    chemistry = {n for f in FILMS for n in input_names(f)}
+    return {"film_chemistry": "additive"} if name in chemistry else {}
+
+
 def default_bounds(name: str, start: float) -> tuple[float, float]:
     """Default bounds: a factor 10 either side of ``start`` for positive inputs, within the valid range."""
     p = PARAMETERS[name]
+    if p.linear:  # outputs linear in it (film chemistry): from its lower limit to 100 typical values above the start
+        lo, hi = (p.low if p.low is not None else start - 100.0 * p.typical), start + 100.0 * (p.typical or max(abs(start), 1.0))
+        if p.low is not None and p.low_open:
+            lo = p.low + 1e-9 * max(abs(p.low), 1.0)
+        return lo, hi
     if _positive(name) and start > 0:
         lo, hi = start / 10.0, start * 10.0
     else:
@@ -54,7 +80,7 @@ def free_names(free) -> list[str]:
         free = [free]
     free = [f.strip().replace("-", "_") for f in free]
     if not free:
-        raise CalibrationError("give at least one parameter to fit (--free NAME ...)")
+        raise CalibrationError("give at least one parameter to fit (--free NAME ...), or none at all to let the data choose")
     for n in free:
         if n not in PARAMETERS:
             raise CalibrationError(f"unknown parameter {n!r} in --free; fittable: {', '.join(CALIBRATABLE)}")
@@ -115,11 +141,14 @@ def fit_bounds(free: list[str], bounds: dict[str, tuple[Any, Any]] | None, start
     return bnds
 
 
-def inside(value: float, bounds: tuple[float, float], log: bool) -> float:
-    """``value`` if strictly inside ``bounds``; otherwise the middle of the bounds (geometric for ``log``)."""
+def inside(value: float, bounds: tuple[float, float], log: bool, linear: bool = False) -> float:
+    """``value`` if strictly inside ``bounds``; otherwise the middle of the bounds (geometric for ``log``);
+    a ``linear`` input on its lower bound (a chemistry term at 0) starts just above it."""
     lo, hi = bounds
     if lo < value < hi:
         return value
+    if linear and value == lo:
+        return lo + 1e-4 * (hi - lo)
     v = min(max(value, lo), hi)
     if v not in (lo, hi):
         return v

@@ -48,6 +48,18 @@ class CalibrationResult:
     elapsed_s: float
     failed_points_after: int = 0
     notes: list[str] = field(default_factory=list)
+    #: without --free: the inputs the data chose and those left fixed, each with why (:class:`cmpsim.calibration.identify.Choice`)
+    choice: object = None
+    #: what the data cannot separate, from the Jacobian at the fit (:func:`cmpsim.calibration.identify.separability`)
+    identifiability: list[str] = field(default_factory=list)
+    #: singular values of the Jacobian at the fit, columns scaled to unit norm
+    singular_values: np.ndarray = field(default_factory=lambda: np.array([]))
+    #: leave-one-out errors of each removal series (:class:`cmpsim.calibration.heldout.SeriesLOO`)
+    loo: list = field(default_factory=list)
+    #: the data files fitted
+    data: list[str] = field(default_factory=list)
+    #: model choices the fitted inputs need (``film_chemistry = "additive"``)
+    settings: dict = field(default_factory=dict)
 
     @property
     def reduced_chi2(self) -> float:
@@ -62,9 +74,13 @@ class CalibrationResult:
         return float(np.sqrt(np.mean(self.residuals_after**2)))
 
     def to_toml(self, path) -> Path:
-        """Write the fitted configuration (every input, SI) to TOML, atomically."""
-        self.config.to_toml(path)
-        return Path(path)
+        """Write the process file, atomically: the fitted configuration (every input, SI), which every
+        command's ``--config`` takes, and its ``[calibration]`` table (:mod:`cmpsim.calibration.processfile`:
+        the constants fitted, which ``cmpsim polish`` and ``cmpsim lot`` apply with the recipe's own tool,
+        their intervals and correlations)."""
+        from .processfile import write_process_file
+
+        return write_process_file(self, path)
 
     def parameter_rows(self) -> list[list[str]]:
         rows = []
@@ -96,15 +112,35 @@ class CalibrationResult:
 
     RESIDUAL_HEADER = ["dataset", "quantity", "conditions", "measured", "model before", "model after", "resid. before", "resid. after", "unit"]
 
+    def loo_rows(self) -> list[list[str]]:
+        return [[s.name, str(s.n), f"{s.calibrated:.4g}", f"{s.preston:.4g}", f"{s.mean:.4g}", s.unit, ", ".join(s.inputs) or "-",
+                 "yes" if s.beats_preston else "no"] for s in self.loo]
+
+    LOO_HEADER = ["series", "points", "LOO calibrated", "LOO Preston s*P*U", "LOO mean", "unit", "inputs (whole series)", "beats Preston"]
+
     def summary(self) -> str:
-        """Plain-text report: fitted values, correlations, residuals, goodness of fit."""
-        out = [text_table(self.PARAMETER_HEADER, self.parameter_rows()), ""]
+        """Plain-text report: the inputs chosen, fitted values with intervals, correlations, what the data
+        cannot separate, residuals before and after, leave-one-out errors, goodness of fit."""
+        out = []
+        if self.choice is not None:
+            out += ["inputs chosen by the data (no --free):"] + [f"  {line}" for line in self.choice.lines()] + [""]
+        out += [text_table(self.PARAMETER_HEADER, self.parameter_rows()), ""]
         if len(self.free) > 1:
             out.append("correlation matrix:")
             out.append(text_table([""] + self.free, [[n] + [f"{c:+.3f}" for c in row] for n, row in zip(self.free, self.correlation)]))
             out.append("")
+        if len(self.singular_values):
+            sv = self.singular_values
+            out.append("identifiability: singular values of the Jacobian (unit columns) " + ", ".join(f"{v:.3g}" for v in sv)
+                       + (f"; condition number {sv[0] / sv[-1]:.3g}" if sv[-1] > 0 else "; singular"))
+        out += [f"identifiability: {m}" for m in self.identifiability] or (["identifiability: every fitted input is separated by these data"] if len(self.free) > 1 else [])
+        out.append("")
         out.append(text_table(self.RESIDUAL_HEADER, self.residual_rows()))
         out.append("")
+        if self.loo:
+            out.append("leave one out (each point predicted by the film chemistry refitted to the others, by Preston's law s*P*U and by the mean):")
+            out.append(text_table(self.LOO_HEADER, self.loo_rows()))
+            out.append("")
         out.append(
             f"chi-square {self.chi2_before:.4g} -> {self.chi2_after:.4g} (dof {self.dof}, reduced {self.reduced_chi2:.3g}); "
             f"RMS whitened residual {self.rms_before:.3g} -> {self.rms_after:.3g}; "

@@ -28,14 +28,23 @@ class Uncertainty:
     notes: list[str] = field(default_factory=list)
 
 
-def central_jacobian(residuals, z: np.ndarray, n_points: int, h: float = 1e-3) -> np.ndarray:
-    """d(residuals)/dz at ``z`` by central differences (two evaluations per variable)."""
+def central_jacobian(residuals, z: np.ndarray, n_points: int, h: float = 1e-3, lower=None, upper=None) -> np.ndarray:
+    """d(residuals)/dz at ``z`` by central differences (two evaluations per variable); one-sided where
+    a step would leave the bounds ``lower``/``upper`` of z (an input at its physical limit, e.g. 0)."""
     J = np.empty((n_points, len(z)))
+    r0 = None
     for k in range(len(z)):
         zp, zm = z.copy(), z.copy()
         zp[k] += h
         zm[k] -= h
-        J[:, k] = (residuals(zp) - residuals(zm)) / (2 * h)
+        below = lower is not None and zm[k] < lower[k]
+        above = upper is not None and zp[k] > upper[k]
+        if below or above:
+            if r0 is None:
+                r0 = residuals(z)
+            J[:, k] = (residuals(zp) - r0) / h if below else (r0 - residuals(zm)) / h
+        else:
+            J[:, k] = (residuals(zp) - residuals(zm)) / (2 * h)
     return J
 
 

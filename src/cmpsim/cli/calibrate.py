@@ -43,17 +43,19 @@ def _split_names(values) -> list[str]:
 
 @main.command(name="calibrate", cls=_ListOptionsCommand)
 @click.argument("data", nargs=-1, required=True, type=click.Path(dir_okay=False))
-@click.option("--free", "free", multiple=True, required=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius (or repeated, or comma-separated).")
+@click.option("--free", "free", multiple=True, metavar="NAME [NAME ...]", help="Inputs to fit, e.g. --free asperity_density asperity_radius (or repeated, or comma-separated). Without it the data's quantities choose the inputs they can identify (removal rates of a film: its chemistry constants) and the report says which and why.")
 @click.option("--bounds", "bounds", multiple=True, metavar="NAME=LOW:HIGH", help="Bounds with units, e.g. --bounds pad_modulus=20MPa:500MPa (repeatable; default a factor 10 either side).")
 @config_options
-@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="Fitted configuration, accepted by every command's --config (and `cmpsim run FILE`).")
+@click.option("--out", "out_path", type=click.Path(dir_okay=False), default="calibrated.toml", show_default=True, help="The process file: the fitted configuration, accepted by every command's --config (and `cmpsim run FILE`), with a [calibration] table (constants, 95 % intervals, correlations) whose constants `cmpsim polish --config` and `cmpsim lot --config` apply with the recipe's own tool.")
 @click.option("--max-evaluations", type=click.IntRange(min=1), default=None, help="Model evaluations allowed to the optimiser.")
 @click.option("--quiet", is_flag=True, help="Do not print the evaluations while fitting.")
 def calibrate_command(data, free, bounds, config_path, preset, assignments, grid, out_path, max_evaluations, quiet):
-    """Fit uncertain inputs to measurements (scipy least_squares, bounded).
+    """Fit inputs to measurements (scipy least_squares, bounded); without --free the data choose them.
 
-    Reports fitted values with standard errors and 95 % intervals, their correlations and
-    the residuals before and after, and writes the fitted configuration to --out.
+    Reports the inputs chosen and why (and what the data cannot separate, from the fit's Jacobian),
+    fitted values with standard errors and 95 % intervals, their correlations, the residuals before
+    and after and the leave-one-out error beside Preston's law's and the mean's, and writes the
+    process file to --out (nothing is written when the fit cannot run).
     """
     from ..calibration import calibrate
 
@@ -67,7 +69,7 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
             lo, hi = rng.split(":", 1)
             bnds[name.strip().replace("-", "_")] = (lo.strip(), hi.strip())
         cfg = load_config(config_path, assignments, preset, grid)
-        result = calibrate(list(data), names, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
+        result = calibrate(list(data), names or None, config=cfg, bounds=bnds or None, max_nfev=max_evaluations, progress=not quiet)
     except ValueError as exc:
         _fail(str(exc))
     try:

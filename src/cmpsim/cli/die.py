@@ -8,6 +8,7 @@ import click
 
 from .group import _fail, _rich_table, command_errors, main
 from .inputs import config_options, load_config, parse_assignments
+from .progress import extraction_bar
 
 
 @main.command(name="die")
@@ -100,10 +101,11 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
             if window is None and "window" in options:
                 window = to_si(options["window"], "m", f"window in {stack_path}", "20 um")
             rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
-            result = stack = simulate_stack(layout, levels, window, top=top or options.get("top"), pdk=pdk or options.get("pdk"),
-                                            layer_map=layer_map or options.get("layer_map"), config=cfg, blanket_rate=rate, time=t,
-                                            spec=parse_spec(options.get("spec")) | spec, planarization_length=pl, weighting=weighting,
-                                            feature_contact=feature_contact)
+            with extraction_bar() as told:
+                result = stack = simulate_stack(layout, levels, window, top=top or options.get("top"), pdk=pdk or options.get("pdk"),
+                                                layer_map=layer_map or options.get("layer_map"), config=cfg, blanket_rate=rate, time=t,
+                                                spec=parse_spec(options.get("spec")) | spec, planarization_length=pl, weighting=weighting,
+                                                feature_contact=feature_contact, progress=told)
         elif real:
             if not layers:
                 raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml")
@@ -113,7 +115,9 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
                 result, plan, fill_file = _fill_run(layout, list(layers), window if window is not None else 20e-6, top, pdk, layer_map,
                                                     rules, fill_pair, cfg, rate, t, kwargs, out_dir)
             else:
-                layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk, layer_map=layer_map)
+                with extraction_bar() as told:
+                    layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk,
+                                        layer_map=layer_map, progress=told)
         if stack is not None or plan is not None:
             pass
         elif wafer:

@@ -35,6 +35,9 @@ def command_errors(no_equilibrium: str = "no equilibrium"):
         _fail(f"{no_equilibrium}: {exc}", EXIT_NO_EQUILIBRIUM)
     except ValueError as exc:
         _fail(str(exc))
+    except MemoryError:
+        _fail("out of memory: the problem does not fit in this machine's memory; choose a larger --window or a smaller "
+              "region (--top a sub-cell), or use a machine with more memory")
 
 
 def _warn(message: str) -> None:

@@ -35,6 +35,16 @@ def load_config(config_path, assignments, preset: str | None = None, grid: str |
     return cfg.replace(grid=grid) if grid else cfg
 
 
+def recipe_overrides(config_path, assignments) -> dict:
+    """The inputs for every step of a recipe (``cmpsim polish``, ``cmpsim lot``): the constants of
+    ``--config`` (``cmpsim.inputs.processfile.process_constants``: a process file's fitted constants),
+    then ``--set`` (raises ValueError)."""
+    from ..inputs.processfile import process_constants
+
+    constants = process_constants(config_path) if config_path else {}
+    return {**constants, **parse_assignments(assignments)}
+
+
 def config_options(command):
     """The options of the inputs, the same on every command that solves: --config, --preset, --set, --grid."""
     for option in reversed(

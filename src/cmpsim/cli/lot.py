@@ -6,6 +6,7 @@ import click
 
 from ..polisher.control import CLOCKS, CONTROL, DRIFT_PRIORS, DRIFT_WEIGHT, WEIGHT
 from .group import _rich_table, command_errors, main
+from .inputs import recipe_overrides
 
 
 @main.command(name="lot")
@@ -23,12 +24,13 @@ from .group import _rich_table, command_errors, main
 @click.option("--idle-time", "idle_time", default="30 s", show_default=True, metavar="TIME", help="Time between two wafers (the pad cools; ex-situ conditioning works then).")
 @click.option("--qualification", type=click.IntRange(min=0), default=1, show_default=True, help="Monitor wafers polished with the recipe as written on the pad before the lot: the last one's measured rate seeds the EWMA and the lot starts on the pad they leave (0: a fresh pad, the EWMA seeded by the model).")
 @click.option("--worn-summits", "worn_summits", is_flag=True, help="The worn pad's summit-height std enters every step's wafer solve (docs/polisher.md: below about 2 um the solver finds no equilibrium).")
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), default=None, help="A configuration file applied to every step unless the step sets the input: a process file of `cmpsim calibrate` applies its fitted constants (and the model choices they need) with the recipe's own tool; any other file the inputs it names. --set wins over it.")
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input for every step unless the step sets it (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): wafers [{index, polish_time (s), removal_rate_mean (m/s), final_thickness_mean (m), final_thickness_nonuniformity (fraction), zone_pressures (Pa), ...}], target, units.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, metavar="DIR", help="Write lot.json, lot.csv and the lot plot lot.png into DIR, and the checkpoint lot.checkpoint.json after every wafer.")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out DIR (an interrupted lot, even killed with -9): the same results as without the interruption. Refused if the checkpoint's inputs differ; without a checkpoint the lot starts.")
 def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clock, drift_prior, zone_weight, zone_feedback, seed, idle_time, qualification, worn_summits,
-                assignments, as_json, out_dir, resume):
+                config_path, assignments, as_json, out_dir, resume):
     """Polish a lot of wafers of RECIPE.toml in sequence on one pad that warms, glazes and is conditioned.
 
     Each wafer's incoming thickness varies (reproducible with --seed); with --control ewma the
@@ -37,7 +39,6 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
     from ..inputs.units import to_si
     from ..polisher.lot import run_lot, write_lot
     from ..polisher.recipe import read_recipe
-    from .inputs import parse_assignments
 
     from pathlib import Path
 
@@ -50,7 +51,7 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
             if not 0 < value <= 1:
                 raise ValueError(f"{option} is an EWMA weight in (0, 1]; got {value!r}")
         parsed = read_recipe(recipe)
-        overrides = parse_assignments(assignments)
+        overrides = recipe_overrides(config_path, assignments)
         idle = to_si(idle_time, "s", "--idle-time", example="s")
         result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle,
                          qualification=qualification, worn_summits=worn_summits, weight=weight, drift_weight=drift_weight,
@@ -77,3 +78,4 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
     if result.target is not None:
         console.print(f"target {result.target * 1e9:.1f} nm")
     console.print(f"{result.solves} wafer equilibria solved in {result.wall_time:.1f} s")
+

@@ -5,10 +5,12 @@ from __future__ import annotations
 import click
 
 from .group import _rich_table, command_errors, main
+from .inputs import recipe_overrides
 
 
 @main.command(name="polish")
 @click.argument("recipe", type=click.Path(dir_okay=False))
+@click.option("--config", "config_path", type=click.Path(dir_okay=False), default=None, help="A configuration file applied to every step unless the step sets the input: a process file of `cmpsim calibrate` applies its fitted constants (and the model choices they need) with the recipe's own tool; any other file the inputs it names. --set wins over it.")
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input for every step unless the step sets it (repeatable), e.g. --set grid=coarse.")
 @click.option("--time-step", "time_step", default="1 s", show_default=True, metavar="TIME", help="Time step of the integration and the end point's sampling.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): steps [{name, duration (s), end ('time' or 'endpoint'), removal_rate_mean (m/s), pad_temperature {time (s), value (K)}, thickness {radius (m), film: (m)}, signals, endpoint, ...}], target, pad_state, units.")
@@ -23,7 +25,7 @@ from .group import _rich_table, command_errors, main
 @click.option("--sites", "sites_text", metavar="R1,R2,...", default=None, help="--die: the radii of the dies (e.g. 0,70mm,140mm; a bare number is mm). Default: the centre, mid-radius and the outermost whole die.")
 @click.option("--die-param", "die_params", multiple=True, metavar="NAME=VALUE", help="--die: a die-model input with units, e.g. --die-param trench_depth=0.4um (repeatable; default copper_thickness and barrier_thickness from the recipe's films).")
 @click.option("--spec", "specs", multiple=True, metavar="KIND=LIMIT", help="--die: a hotspot limit: thickness=5nm, step_height=20nm, dishing=30nm, erosion=20nm (repeatable).")
-def polish_command(recipe, assignments, time_step, as_json, out_dir, die_layout, layers, pdk, layer_map, top, window_text, sites_text,
+def polish_command(recipe, config_path, assignments, time_step, as_json, out_dir, die_layout, layers, pdk, layer_map, top, window_text, sites_text,
                    die_params, specs):
     """Polish RECIPE.toml through time: the film stack per radius, the end point, the pad's temperature.
 
@@ -34,11 +36,10 @@ def polish_command(recipe, assignments, time_step, as_json, out_dir, die_layout,
     from ..inputs.units import to_si
     from ..polisher.engine import polish
     from ..polisher.recipe import read_recipe
-    from .inputs import parse_assignments
 
     with command_errors():
         parsed = read_recipe(recipe)
-        overrides = parse_assignments(assignments)
+        overrides = recipe_overrides(config_path, assignments)
         dt = to_si(time_step, "s", "--time-step", example="s")
         die = _riding_die(die_layout, layers, pdk, layer_map, top, window_text, sites_text, die_params, specs)
         result = polish(parsed, overrides=overrides, time_step=dt, die=die)
@@ -108,3 +109,4 @@ def _die_params(items) -> dict:
         return parse_assignments(items)
     except ValueError as exc:
         raise ValueError(str(exc).replace("--set", "--die-param").replace("applied_pressure=4psi", "trench_depth=0.4um")) from None
+

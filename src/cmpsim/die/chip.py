@@ -49,19 +49,19 @@ def is_layout_file(path) -> bool:
 
 
 def layout_die(layout, layers, window: float = 20e-6, *, top: str | None = None, pdk: str | None = None, layer_map=None,
-               origin=None) -> Layout:
+               origin=None, progress=None) -> Layout:
     """The die of a layout's layers (:func:`cmpsim.layout.extract_windows`: .gds, .gds.gz, .oas), one cell per window.
 
     ``layout`` is a path or a :class:`cmpsim.layout.Layout` already read. ValueError (naming the
     parameter) for a file that is not a layout, a layer it lacks, an empty layer, a window
-    larger than the die.
+    larger than the die. ``progress`` (stage, done, total) is told how the extraction goes.
     """
     from ..layout import extract_windows
 
     if isinstance(layers, tuple) and all(isinstance(x, str) for x in layers):
         layers = list(layers)  # a tuple of names, not a (layer, datatype) pair
     try:
-        w = extract_windows(layout, layers, window, top=top, pdk=pdk, layer_map=layer_map, origin=origin)
+        w = extract_windows(layout, layers, window, top=top, pdk=pdk, layer_map=layer_map, origin=origin, progress=progress)
     except FileNotFoundError as exc:
         raise ValueError(str(exc)) from None
     return Layout.from_windows(w)
@@ -80,15 +80,19 @@ class DieModel:
 
     ``process`` is a :class:`DieProcess` or ``"oxide"``/``"copper"`` (keywords set its inputs with
     units); ``blanket_rate`` (m/s) defaults to the wafer-mean rate of ``cmpsim.solve(config)`` for the
-    process's film (solved once, at construction); ``spec`` the hotspot limits. Other arguments
-    as :func:`cmpsim.die.simulate`.
+    process's film (solved once, at construction); ``spec`` the hotspot limits; ``uncertainty`` a
+    calibration's covariance (every :meth:`run` then gives its hotspots ``interval`` and
+    ``probability``, :mod:`cmpsim.die.uncertainty`). Other arguments as :func:`cmpsim.die.simulate`.
     """
 
     def __init__(self, config=None, process="oxide", *, blanket_rate: float | None = None, planarization_length: float | None = None,
-                 weighting: str = "gaussian", feature_contact: str = "elastic", spec=None, **process_values):
+                 weighting: str = "gaussian", feature_contact: str = "elastic", spec=None, uncertainty=None, **process_values):
         from .hotspots import parse_spec
+        from .polish import _fitted
 
         config = _config(config)
+        process, planarization_length, process_values = _fitted(uncertainty, process, planarization_length, process_values)
+        self.uncertainty = uncertainty  # a calibration's covariance: hotspots with interval and probability (cmpsim.die.uncertainty)
         if process is None or isinstance(process, str):
             process = DieProcess.from_values(process or "oxide", **process_values)
         elif process_values:
@@ -132,7 +136,10 @@ class DieModel:
         eff = effective_density(lay.density, lay.cell_size, self.weight)
         template = DieResult(lay, self.process, 0.0, self.blanket_rate, self.weight.length, self.derived, self.weighting, eff, None,
                              self.conventions, self.feature_contact, dict(self.spec), level)
-        return _polish(lay, self.process, self.config, self.blanket_rate, time, eff, self.feature, incoming, template)
+        from .polish import _with_sigma
+
+        result = _polish(lay, self.process, self.config, self.blanket_rate, time, eff, self.feature, incoming, template)
+        return _with_sigma(result, self.config, self.feature, incoming, self.uncertainty)
 
     # a die through the steps of a recipe: start once, then resume step after step (cmpsim.polisher.ride)
     def _effective(self, lay):
@@ -291,14 +298,17 @@ def read_stack(path) -> tuple[list[StackLevel], dict]:
 
 def simulate_stack(layout, levels, window: float | None = None, *, top: str | None = None, pdk: str | None = None, layer_map=None,
                    config=None, blanket_rate: float | None = None, time: float | None = None, spec=None,
-                   planarization_length: float | None = None, weighting: str = "gaussian", feature_contact: str = "elastic") -> StackResult:
+                   planarization_length: float | None = None, weighting: str = "gaussian", feature_contact: str = "elastic",
+                   progress=None) -> StackResult:
     """Polish the levels of a stack bottom first (docs/model.md, section 18.10).
 
     ``layout`` is a layout path or a :class:`cmpsim.layout.Layout`, ``levels`` a list of
     :class:`StackLevel` (or a stack file, :func:`read_stack`, whose ``window``, ``pdk``,
     ``layer_map``, ``top`` and ``spec`` apply where not given here). Every level is extracted on
-    the same window grid; each is polished over the topography the level below left
+    the same window grid, on one read of the file (:func:`cmpsim.layout.extract_levels`); each is
+    polished over the topography the level below left
     (:meth:`cmpsim.die.evolution.DieEvolution.topography`). The wafer is solved once per film.
+    ``progress`` (stage, done, total) is told how the extraction goes.
     """
     from ..layout import read_layout
     from ..inputs.units import to_si
@@ -320,7 +330,11 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
             layout = read_layout(layout)
         except FileNotFoundError as exc:
             raise ValueError(str(exc)) from None
-    dies = [layout_die(layout, lv.layers, window, top=top, pdk=pdk, layer_map=layer_map) for lv in levels]
+    from ..layout import extract_levels
+
+    specs = [list(lv.layers) if isinstance(lv.layers, tuple) else lv.layers for lv in levels]
+    dies = [Layout.from_windows(w) for w in extract_levels(layout, specs, window, top=top, pdk=pdk, layer_map=layer_map,
+                                                           progress=progress)]
     config = _config(config)
     rates: dict[str, float] = {}
     out, incoming = [], None

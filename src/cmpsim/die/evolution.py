@@ -92,9 +92,13 @@ class DieEvolution:
         self.set_rate(blanket_rate)
         eff = np.asarray(effective_density, dtype=float)
         self.f = np.clip(eff if self._eff_is_a else 1.0 - eff, DENSITY_FLOOR, 1.0 - DENSITY_FLOOR)
-        self.h = contact_heights(self._gap, self.process.contact_height, asperity_radius)
+        radius = self.process.summit_radius or asperity_radius  # a calibrated summit radius (DieProcess) before the pad's
+        self.h = contact_heights(self._gap, self.process.contact_height, radius)
         if feature is not None:  # the pad body bulging into the gap (cmpsim.die.reach): h grows with the gap's width
-            self.h = self.h + feature.bulge(self._gap, self._pitches(), self.f)
+            bulge = feature.bulge(self._gap, self._pitches(), self.f)
+            if self.process.feature_modulus > 0:  # G is proportional to 1/E (half space and layer alike, same nu)
+                bulge = bulge * (feature.modulus / self.process.feature_modulus)
+            self.h = self.h + bulge
 
     def set_rate(self, blanket_rate: float) -> None:
         """Set the blanket rate (m/s) from now on, the rest of the conditions kept (:meth:`condition`)."""

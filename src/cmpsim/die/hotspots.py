@@ -4,7 +4,9 @@ Four quantities have limits (``spec``, m): ``thickness`` (a window's final surfa
 die's mean, :attr:`cmpsim.die.evolution.DieEvolution.thickness`; its magnitude is compared),
 ``step_height``, ``dishing`` and ``erosion`` (copper). A hotspot is one window and one quantity:
 ``{"kind", "x", "y", "value", "limit"}`` (m; x, y the centre of the window's part inside the
-die, in the layout's coordinates), with ``"level"`` in a stack.
+die, in the layout's coordinates), with ``"level"`` in a stack; a run that carries a
+calibration's covariance adds ``"interval"`` [low, high] (m, 95 %) and ``"probability"`` (of
+exceeding the limit; :mod:`cmpsim.die.uncertainty`), an uncalibrated run has neither key.
 
 Files (written atomically): ``hotspots.lyrdb``, KLayout's report database (XML: one category per
 quantity, or per level with a sub-category per quantity; the cell is the layout's top cell; each
@@ -67,12 +69,17 @@ def _window_boxes(x, y, cell, extent):
     return x0, y0, x1, y1
 
 
-def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: str | None = None) -> list[dict]:
+def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: str | None = None, sigma: dict | None = None) -> list[dict]:
     """The hotspots of per-window ``fields`` (name -> (ny, nx) array, m) against ``spec`` (kind -> limit, m).
 
     Windows wholly outside the die's outline ``extent`` (xmin, ymin, xmax, ymax) are skipped; the
     position is the centre of the window's part inside it. Sorted by value / limit, largest first.
+    With ``sigma`` (kind -> (ny, nx) standard deviation, m; a calibrated run,
+    :mod:`cmpsim.die.uncertainty`) every hotspot also carries ``interval`` [low, high] (m, 95 %)
+    and ``probability`` (that the quantity exceeds its limit in magnitude).
     """
+    from .uncertainty import exceedance_probability
+
     x0, y0, x1, y1 = _window_boxes(np.asarray(x), np.asarray(y), cell, extent)
     inside = (x1 > x0) & (y1 > y0)
     out = []
@@ -89,6 +96,10 @@ def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: st
                  "box": (float(x0[iy, ix]), float(y0[iy, ix]), float(x1[iy, ix]), float(y1[iy, ix]))}
             if level is not None:
                 h["level"] = level
+            if sigma is not None and kind in sigma:
+                sd = float(np.asarray(sigma[kind])[iy, ix])
+                h["interval"] = [h["value"] - 1.96 * sd, h["value"] + 1.96 * sd]
+                h["probability"] = float(exceedance_probability(h["value"], sd, limit))
             out.append(h)
     out.sort(key=lambda h: -abs(h["value"]) / h["limit"])
     return out

@@ -100,6 +100,10 @@ class DieResult:
     level: str | None = None
     #: ``cmpsim die --fill``: the JSON ``fill`` object ({before, after, added_area, ...}); this die is then the filled one
     fill: dict | None = None
+    #: a calibrated run (``simulate(..., uncertainty=)``): the fit's :class:`cmpsim.die.uncertainty.DieUncertainty`
+    uncertainty: object = None
+    #: and the standard deviation of every field with a limit, kind -> (ny, nx) m (docs/calibrate-die.md)
+    sigma: dict | None = field(default=None, repr=False)
 
     @property
     def thickness_range(self) -> float:
@@ -117,7 +121,8 @@ class DieResult:
         from .hotspots import find_hotspots
 
         x, y = self.layout.coordinates()
-        return find_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, self.spec if spec is None else spec, self.level)
+        return find_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, self.spec if spec is None else spec, self.level,
+                             self.sigma)
 
     def hotspot_count(self, spec: dict | None = None) -> int:
         """The number of hotspots (windows x quantities over their limits)."""
@@ -218,6 +223,9 @@ class DieResult:
         if self.fill is not None:
             out["fill"] = dict(self.fill)
             out["units"]["added_area"] = "m^2"
+        if self.uncertainty is not None:
+            out["uncertainty"] = self.uncertainty.to_dict()
+            out["units"].update(interval="m", probability="1")
         return out
 
     def dataset(self):
@@ -396,7 +404,7 @@ def _prepare(layout, config, process, planarization_length, weighting, cell_size
 
 def simulate(layout, time: float | None = None, *, config=None, blanket_rate: float | None = None, process=None,
              planarization_length: float | None = None, weighting: str = "gaussian", cell_size: float | None = None,
-             feature_contact: str = "elastic", incoming=None, spec=None, **process_values) -> DieResult:
+             feature_contact: str = "elastic", incoming=None, spec=None, uncertainty=None, **process_values) -> DieResult:
     """Polish one die (docs/model.md, section 18).
 
     Parameters
@@ -427,10 +435,15 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
         The topography a level below left on every cell (m; :meth:`DieEvolution.topography`).
     spec : dict, optional
         Hotspot limits, kind -> m or text with units (:mod:`cmpsim.die.hotspots`).
+    uncertainty : cmpsim.die.uncertainty.DieUncertainty, optional
+        A calibration's constants and covariance (:meth:`cmpsim.calibration.die.DieCalibration.uncertainty`):
+        the run uses the fitted constants, and every hotspot gets its 95 % ``interval`` and the
+        ``probability`` that it exceeds its limit (linearisation, :mod:`cmpsim.die.uncertainty`).
     """
     from .hotspots import parse_spec
 
     spec = parse_spec(spec)
+    process, planarization_length, process_values = _fitted(uncertainty, process, planarization_length, process_values)
     config, layout, process, w, derived, eff, fc = _prepare(layout, config, process, planarization_length, weighting, cell_size,
                                                             feature_contact, **process_values)
     if blanket_rate is None:
@@ -439,9 +452,46 @@ def simulate(layout, time: float | None = None, *, config=None, blanket_rate: fl
         blanket_rate = float(solve(config, relative=False).removal_rate_mean)
     if time is not None and not (math.isfinite(time) and time >= 0):
         raise ValueError(f"time must be >= 0 s; got {time!r}")
-    return _polish(layout, process, config, float(blanket_rate), time, eff, fc, incoming,
-                   DieResult(layout, process, 0.0, float(blanket_rate), w.length, derived, weighting, eff, None, _conventions(config),
-                             feature_contact, spec))
+    result = _polish(layout, process, config, float(blanket_rate), time, eff, fc, incoming,
+                     DieResult(layout, process, 0.0, float(blanket_rate), w.length, derived, weighting, eff, None, _conventions(config),
+                               feature_contact, spec))
+    return _with_sigma(result, config, fc, incoming, uncertainty)
+
+
+def _fitted(uncertainty, process, planarization_length, process_values):
+    """(process, planarization length, process keywords) with a calibration's fitted constants over them."""
+    if uncertainty is None:
+        return process, planarization_length, process_values
+    fitted = dict(zip(uncertainty.names, uncertainty.values))
+    if "planarization_length" in fitted:
+        planarization_length = fitted.pop("planarization_length")
+    if isinstance(process, DieProcess):
+        return process.replace(**fitted), planarization_length, process_values
+    return process, planarization_length, {**process_values, **fitted}
+
+
+def _with_sigma(result: DieResult, config, fc, incoming, uncertainty) -> DieResult:
+    """``result`` with the standard deviation of every field with a limit (:func:`cmpsim.die.uncertainty.window_sigma`), or as it is."""
+    if uncertainty is None:
+        return result
+    from dataclasses import replace as _replace
+
+    from .uncertainty import window_sigma
+
+    layout, weighting = result.layout, result.weighting
+    if weighting == "pad" and "planarization_length" in uncertainty.names:
+        raise ValueError("weighting = 'pad' takes its length from the pad stack: a calibrated planarization_length needs 'gaussian' or 'elliptic'")
+
+    def evaluate(values: dict) -> dict:
+        values = dict(values)
+        length = values.pop("planarization_length", result.planarization_length)
+        wt, _ = _weighting(config, None if weighting == "pad" else length, weighting)
+        e = effective_density(layout.density, layout.cell_size, wt)
+        ev = DieEvolution(layout, result.process.replace(**values), e, result.blanket_rate, config.asperity_radius, fc, incoming)
+        ev.advance_to(result.time)
+        return {"thickness": ev.thickness, "step_height": ev.step_height, "dishing": ev.dishing, "erosion": ev.erosion}
+
+    return _replace(result, uncertainty=uncertainty, sigma=window_sigma(evaluate, uncertainty))
 
 
 def _polish(layout, process, config, blanket_rate, time, eff, fc, incoming, template: DieResult) -> DieResult:

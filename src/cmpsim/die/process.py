@@ -34,6 +34,10 @@ DIE_PARAMETERS: dict[str, tuple[str, float, tuple[float, float], str, str]] = {
                             "assumed; Cu:Ta selectivities up to about 500 are claimed for copper slurries (US 6,332,989 B1)"),
     "oxide_selectivity": ("1", 0.02, (1e-6, 100.0), "copper: oxide removal rate / copper removal rate", "assumed: a copper slurry selective to oxide"),
     "planarity": ("m", 10e-9, (1e-12, 1e-4), "step height under which a cell counts as planarized (time_to_planarize)", "a choice: 10 nm"),
+    "summit_radius": ("m", 0.0, (0.0, 1e-3), "radius of the pad summits reaching into a gap (the sagitta b^2/8R of the contact height); 0: the pad's asperity_radius",
+                      "0: the wafer model's asperity_radius (docs/model.md 13d); a calibration may set it (docs/calibrate-die.md)"),
+    "feature_modulus": ("Pa", 0.0, (0.0, 1e12), "Young's modulus of the pad body at the scale of a line array (the bulge into a gap, cmpsim.die.reach); 0: the top pad's bulk modulus",
+                        "0: the wafer model's pad_bulk_modulus; the surface layer's own modulus at 10-100 um is not known (docs/model.md 18.5): a calibration may set it"),
     "over_polish": ("1", 0.3, (0.0, 10.0), "default end time: the end point (all planarized, oxide; all cleared, copper) times (1 + over_polish)",
                     "15-35 % over-polish (Nitta Haas tungsten report 2014, second-hand); 30 % chosen"),
 }
@@ -52,6 +56,8 @@ class DieProcess:
     barrier_selectivity: float = DIE_PARAMETERS["barrier_selectivity"][1]
     oxide_selectivity: float = DIE_PARAMETERS["oxide_selectivity"][1]
     planarity: float = DIE_PARAMETERS["planarity"][1]
+    summit_radius: float = DIE_PARAMETERS["summit_radius"][1]
+    feature_modulus: float = DIE_PARAMETERS["feature_modulus"][1]
     over_polish: float = DIE_PARAMETERS["over_polish"][1]
 
     def __post_init__(self) -> None:

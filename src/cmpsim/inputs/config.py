@@ -26,6 +26,7 @@ from .derived import loading_overrides as _loading_overrides
 from .derived import with_zone_load as _with_zone_load
 from .derived import zone_mean_pressure
 from ..numerics.grid import GRID_EDGE, GRID_PRESETS
+from ..physics.chemistry import input_names as chemistry_input_names
 from ..physics.materials import ABRASIVES, FILMS, krieger_dougherty, volume_fraction
 from .param import Param
 
@@ -52,6 +53,22 @@ __all__ = [
 _CARRIER_VISCOSITY = 5e-3 / float(krieger_dougherty(volume_fraction(0.125, ABRASIVES["silica"].density), 1.0))
 
 _P = Param
+
+
+def _chemistry_params() -> list[Param]:
+    """The three constants of eq. 13h.2 for every film of :data:`cmpsim.physics.materials.FILMS`."""
+    out = []
+    for film in FILMS:
+        factor, speed, rate = chemistry_input_names(film)
+        why = f"film_chemistry = 'additive', film = '{film}'"
+        out += [
+            Param(factor, "process", f"k_{film}", "", "", 1.0, f"Factor k_F on the mechanical removal rate of {film} ({why}): RR = k_F RR_m + B_F |du| + R_c,F", "1: the removal law's own rate (no calibration); fitted by `cmpsim calibrate` to removal rates of the film (docs/model.md, 13h)", 0.0, None, False, typical=1.0, linear=True),
+            Param(speed, "process", f"B_{film}", "", "nm/m", 0.0, f"Chemical removal per unit sliding distance B_F of {film} ({why}): the term B_F |du| of the rate", "0: no chemistry (no sourced value for any slurry here); fitted by `cmpsim calibrate` to removal rates of the film at several sliding speeds (Babu's group's law RR = K P V + B V + R_c, docs/model.md, 13h)", 0.0, None, False, typical=1e-8, linear=True),
+            Param(rate, "process", f"R_c,{film}", "m/s", "nm/min", 0.0, f"Chemical removal rate R_c,F of {film} that needs no sliding ({why}): the constant term of the rate", "0: no chemistry (no sourced value for any slurry here); fitted by `cmpsim calibrate` to removal rates of the film (Babu's group's law RR = K P V + B V + R_c, docs/model.md, 13h)", 0.0, None, False, typical=1e-8, linear=True),
+        ]
+    return out
+
+
 PARAMETERS: dict[str, Param] = {
     p.name: p
     for p in [
@@ -87,6 +104,9 @@ PARAMETERS: dict[str, Param] = {
         _P("fluid_shear_weight", "process", "chi", "", "", 0.0, "Share chi of the slurry's shear power that removes material in the shear-power law", "docs/model.md ('Removal rate'): removal needs abrasive contact pressure, which the slurry's bulk shear does not give", 0.0, 1.0, False, False),
         _P("removal_shear", "process", "-", "choice", "", "total", "Shear stress tau of the removal law: slurry plus pad-summit friction, or slurry only (Runnels & Eyman)", "docs/model.md ('Removal rate')", choices=("total", "slurry")),
         _P("pad_temperature", "process", "T_pad", "K", "K", 0.0, "Temperature of the pad surface under the wafer, the base of the chemical step's flash temperature T = T_pad + beta mu p_c |du| (removal_kinetics = 'two_step'; chemical_rate stays the rate at slurry_temperature); 0 = slurry_temperature. Set through time by cmpsim polish from the pad's heat balance", "cmpsim.physics.thermal (the pad's heat balance, docs/polisher.md); 0: the pad at the slurry's temperature, the steady model before issue 32", 0.0, 400.0, False, False),
+        # film chemistry (docs/model.md, 13h): RR = k_F RR_m + B_F |du| + R_c,F per film, picked by film_chemistry
+        _P("film_chemistry", "process", "-", "choice", "", "none", "What the slurry's chemistry adds to the mechanical removal rate of the film polished: nothing (the removal law alone), or the additive law RR = k_F RR_m + B_F |du| + R_c,F with the film's constants mechanical_factor_<film>, chemistry_speed_<film>, chemistry_rate_<film>", "none: the mechanical model, uncalibrated (no sourced chemistry constants for any slurry here); additive: the empirical law RR = K P V + B V + R_c of S. V. Babu's group (read in a transcription), with cmpsim's mechanical rate for K P V; set by `cmpsim calibrate` (docs/model.md, 13h)", choices=("none", "additive")),
+        *_chemistry_params(),
         # ---------------------------------------------------------------- slurry
         _P("slurry_model", "slurry", "-", "choice", "", "newtonian", "Slurry rheology: Haff grain flow (the paper, solved in ln p) or a Newtonian liquid (solved in p)", "docs/model.md ('Newtonian slurry and cavitation')", choices=("granular", "newtonian")),
         _P("slurry_viscosity", "slurry", "eta", "Pa*s", "mPa*s", 0.0, "Viscosity of the Newtonian slurry (slurry_model = 'newtonian'); 0 = from solids_loading by the Krieger-Dougherty law on carrier_viscosity", "Set: a measured value (Thakurta et al., J. Electrochem. Soc. 148(4) G207 (2001): 0.005 Pa s; CMP slurries 1-30 mPa s; Lai, PhD MIT 2001: 0.03 Pa s); 0: Krieger & Dougherty, Trans. Soc. Rheol. 3, 137 (1959), docs/model.md ('Slurry viscosity'); the range stops at 10 Pa s, far beyond any slurry", 0.0, 10.0, False, False),
@@ -129,6 +149,7 @@ PARAMETERS: dict[str, Param] = {
         _P("pad_groove_pitch", "pad", "lambda_g", "m", "mm", 0.0, "Pitch of the pad's concentric grooves (0 = ungrooved): grooves at ambient pressure vent the slurry film over each land", "0 = the smooth pad of the paper; concentric grooves of CMP pads: about 0.12 in = 3.05 mm (0.09-0.24 in; Applied Materials patent claims, docs/model.md 13g), the 300mm preset's value (issue 32); IC1000's K-groove dimensions are not published", 0.0, None, False),
         _P("pad_groove_width", "pad", "w_g", "m", "mm", 0.0, "Width of the pad's grooves (land = pitch - width), in [0, pitch); 0 with pitch 0", "About 0.02 in = 0.51 mm (0.015-0.04 in; same patent claims, docs/model.md 13g), the 300mm preset's value (issue 32)", 0.0, None, False),
         _P("friction_coefficient", "pad", "mu", "", "", 0.4, "Coulomb friction of pad summits on the wafer", "Lai, PhD thesis MIT (2001): 0.40-0.49 in contact mode", 0.0, None, False),
+        _P("pad_heat_transfer_coefficient", "pad", "h_s", "W/(m^2*K)", "W/(m^2*K)", 0.0, "Heat carried from the pad's surface to the slurry per unit track area and kelvin (the pad's heat balance of cmpsim polish); 0 = from the slurry flow, rho_w c_w Q / A_track", "0: cmpsim.physics.thermal.slurry_heat_transfer_coefficient (150 mL/min, docs/polisher.md); a calibration on a measured temperature sets it (docs/calibrate-die.md)", 0.0, None, False),
         # ---------------------------------------------------------------- numerics
         _P("model", "numerics", "-", "choice", "", "lep", "Model variant", "Paper: 'lep'; earlier elastic model; pure hydrodynamic", choices=("lep", "elastic", "hydrodynamic")),
         _P("grid", "numerics", "-", "grid", "", "default", "Polar grid: preset or rings x sectors", "docs/model.md ('Grid')"),
@@ -227,6 +248,20 @@ def _check_consistency(c: "Config") -> None:
             "solids_loading = 0 leaves the granular slurry without grains (its pressure is that of the grains): valid range "
             "(0, 0.6) with slurry_model = 'granular' and granular_density = 0, or set granular_density > 0"
         )
+
+def _check_chemistry(c: "Config") -> None:
+    """Refuse film-chemistry constants that ``film_chemistry = 'none'`` would ignore, naming the input."""
+    if c.process.film_chemistry != "none":
+        return
+    for film in FILMS:
+        for name in chemistry_input_names(film):
+            value = getattr(c.process, name)
+            if value != PARAMETERS[name].default:
+                raise ValueError(
+                    f"{name} = {value:g} {PARAMETERS[name].unit or '(dimensionless)'} has no effect with film_chemistry = 'none': "
+                    f"set film_chemistry = 'additive' (valid: 'none' with {name} = {PARAMETERS[name].default:g}, or 'additive')"
+                )
+
 
 def _check_grooves(c: "Config") -> None:
     """Refuse groove inputs without a land, or with the mass-conserving cavitation, naming the parameters."""
@@ -366,6 +401,7 @@ class Config:
         new = Config(**{s: dataclasses.replace(getattr(self, s), **groups.get(s, {})) for s in _SECTIONS})
         _check_carrier(new)
         _check_grooves(new)
+        _check_chemistry(new)
         if new.process.zone_pressures:
             new = _with_zone_load(new, overrides)
         _check_consistency(new)
@@ -415,6 +451,9 @@ class Config:
         """
         flat: dict[str, Any] = {}
         data = dict(data)
+        calibration = data.pop("calibration", None)  # a process file's record of its calibration: metadata, not inputs
+        if calibration is not None and not isinstance(calibration, dict):
+            raise ValueError(f"calibration must be the [calibration] table of a process file (cmpsim calibrate); got {calibration!r}")
         if "preset" in data:
             base = cls.preset(str(data.pop("preset")))
         for key, value in data.items():

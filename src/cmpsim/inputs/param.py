@@ -36,6 +36,11 @@ class Param:
     high_open: bool = True
     choices: tuple[str, ...] = ()
     items: bool = False  # a list input: comma-separated numbers and one unit; stored as a tuple of SI floats
+    #: Typical magnitude (SI) of a value a calibration may find: the scale of its fit variable when it
+    #: starts at 0, and the span of its default bounds (None: from the start value).
+    typical: float | None = None
+    #: The outputs are linear in this input (film chemistry): a calibration fits it linearly, never in log.
+    linear: bool = False
 
     def range_text(self) -> str:
         """Human-readable valid range, in SI."""

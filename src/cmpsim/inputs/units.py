@@ -26,7 +26,7 @@ from typing import Any
 __all__ = ["registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
-ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
+ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "a/s": "angstrom/second", "å/s": "angstrom/second", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
 
 
 @lru_cache(maxsize=1)

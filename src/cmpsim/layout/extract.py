@@ -22,11 +22,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .hierarchy import CellRasters
+from .engine import WindowGrid, window_rasters
 from .layermaps import resolve_layers
-from .reader import Layout, layers_in, read_layout, top_cell
+from .reader import Layout, LayoutTooLarge, layer_indexes, layers_in, read_layout, top_cell
 
-__all__ = ["LayoutWindows", "extract_windows", "window_fields"]
+__all__ = ["LayoutWindows", "extract_windows", "extract_levels", "window_fields", "MAX_WINDOWS"]
 
 
 @dataclass(frozen=True)
@@ -74,81 +74,141 @@ def dbu_count(value: float, dbu: float, what: str) -> int:
     return int(k)
 
 
-def extract_windows(layout: Layout | str | os.PathLike, layers, window: float, *, top: str | None = None,
-                    pdk: str | None = None, layer_map=None, origin: tuple[float, float] | None = None,
-                    flat_limit: int = 200_000) -> LayoutWindows:
-    """Density, line width and line space per window of the merged shapes of ``layers``.
+#: Windows of one die above which the grid is refused (each window holds a few dozen float64
+#: fields through the die model): a 20 mm die at 20 um windows is 1e6.
+MAX_WINDOWS = 25_000_000
 
-    ``layout`` is a :class:`Layout` or a path (.gds, .gds.gz, .oas); ``layers`` one or
-    several specs (``"68/20"``, ``(68, 20)`` or a name resolved with ``pdk``/``layer_map``,
-    see :mod:`.layermaps`), all merged; ``window`` the window side (m, a whole number of
-    database units, at most the die's width and height); ``top`` the cell (required when
-    the file has several top-level cells); ``origin`` the lower-left corner of the grid (m,
-    default the top cell's bounding-box corner); ``flat_limit`` the number of flattened
-    shapes up to which a cell with references is flattened instead of composed from its
-    children (the result is the same; only the time differs).
 
-    Raises ValueError (naming the parameter and the valid values) for a layer the file
-    lacks, layers without shapes under the top cell, or a window larger than the die.
-    """
-    if not isinstance(layout, Layout):
-        layout = read_layout(layout)
-    cell = top_cell(layout, top)
+def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]:
+    """The (layer, datatype) pairs of the specs that the die has; ValueError naming a spec it lacks."""
     groups = resolve_layers(layers, pdk=pdk, layer_map=layer_map)
-    present = layers_in(layout)
-    listing = ", ".join(f"{l}/{d}" for l, d in sorted(present))
+    in_file = layers_in(layout)
+    present = layers_in(layout, cell)
+    listing = ", ".join(f"{l}/{d}" for l, d in sorted(in_file))
     pairs: set[tuple[int, int]] = set()
     for spec, group in zip([layers] if isinstance(layers, (str, tuple)) else layers, groups):
         have = [p for p in group if p in present]
         if not have:
             want = ", ".join(f"{l}/{d}" for l, d in group)
-            raise ValueError(f"layer {spec!r} ({want}) is not in {layout.path.name}; its layers are: {listing}")
+            if any(p in in_file for p in group):
+                here = ", ".join(f"{l}/{d}" for l, d in sorted(present))
+                raise ValueError(f"--layer {spec!r}: layers {want} have no shapes under top cell {cell.name!r} (an empty layer: they are drawn "
+                                 f"only under other top cells of {layout.name}); the die's layers are: {here}")
+            raise ValueError(f"--layer {spec!r} ({want}) is not in {layout.name}; its layers are: {listing}")
         pairs.update(have)
+    return pairs
+
+
+def _grid(layout: Layout, cell, window: float, origin) -> tuple[WindowGrid, tuple[int, int, int, int]]:
     dbu = layout.dbu
     if not (isinstance(window, (int, float)) and window > 0 and math.isfinite(window)):
-        raise ValueError(f"window = {window!r} must be a positive length in metres")
+        raise ValueError(f"window = {window!r} must be a positive length in metres (--window)")
     w = dbu_count(window, dbu, "window")
-    box = cell.bounding_box()
-    if box is None:
+    box = cell.bbox()
+    if box.empty():
         raise ValueError(f"top cell {cell.name!r} is empty")
-    (bx0, by0), (bx1, by1) = np.round(box[0]), np.round(box[1])
+    bx0, by0, bx1, by1 = box.left, box.bottom, box.right, box.top
     if w > bx1 - bx0 or w > by1 - by0:
-        raise ValueError(f"window = {window:g} m is larger than the die {cell.name!r} "
+        raise ValueError(f"window = {window:g} m (--window) is larger than the die {cell.name!r} "
                          f"({(bx1 - bx0) * dbu:g} x {(by1 - by0) * dbu:g} m); choose a smaller window")
     if origin is None:
-        ox, oy = int(bx0), int(by0)
+        ox, oy = bx0, by0
     else:
         ox, oy = dbu_count(origin[0], dbu, "origin x"), dbu_count(origin[1], dbu, "origin y")
     nx = max(int(math.ceil((bx1 - ox) / w)), 1)
     ny = max(int(math.ceil((by1 - oy) / w)), 1)
+    if nx * ny > MAX_WINDOWS:
+        raise LayoutTooLarge(f"window = {window:g} m (--window) cuts the die {cell.name!r} ({(bx1 - bx0) * dbu * 1e3:g} x "
+                             f"{(by1 - by0) * dbu * 1e3:g} mm) into {nx} x {ny} = {nx * ny:,} windows, more than the "
+                             f"{MAX_WINDOWS:,} this machine's memory is sized for: choose a larger --window "
+                             f"(at least {math.sqrt((bx1 - bx0) * (by1 - by0) / MAX_WINDOWS) * dbu * 1e6:.3g} um) or a smaller region")
+    return WindowGrid(int(ox), int(oy), int(w), nx, ny), (bx0, by0, bx1, by1)
 
-    engine = CellRasters(layout.library, pairs, w, flat_limit=flat_limit)
-    phase = (ox % w, oy % w)
-    area_r, len_r, ix0, iy0 = engine.raster(cell.name, phase=phase)
-    area = np.zeros((ny, nx))
-    length = np.zeros((ny, nx))
-    # window [0, 0] of the die is grid window ((ox - phase) / w, ...) of the raster
-    kx, ky = (ox - phase[0]) // w - ix0, (oy - phase[1]) // w - iy0
-    if area_r.size:
-        rh, rw = area_r.shape
-        sx0, sy0 = max(kx, 0), max(ky, 0)
-        sx1, sy1 = min(kx + nx, rw), min(ky + ny, rh)
-        if sx1 > sx0 and sy1 > sy0:
-            area[sy0 - ky:sy1 - ky, sx0 - kx:sx1 - kx] = area_r[sy0:sy1, sx0:sx1]
-            length[sy0 - ky:sy1 - ky, sx0 - kx:sx1 - kx] = len_r[sy0:sy1, sx0:sx1]
+
+def _windows(layout: Layout, cell, pairs, grid: WindowGrid, box, threads, big, progress, stats) -> LayoutWindows:
+    dbu = layout.dbu
+    lis = layer_indexes(layout, pairs)
+    try:
+        area, length = window_rasters(layout.db, cell, lis, grid, threads=threads, big=big, progress=progress, stats=stats)
+    except MemoryError:
+        raise LayoutTooLarge(f"the shapes of layers {sorted(pairs)} under {cell.name!r} do not fit in this machine's memory "
+                             "when merged: choose a larger --window, a smaller region (--top a sub-cell), or more memory") from None
+    except RuntimeError as exc:
+        if "bad_alloc" in str(exc) or "memory" in str(exc).lower():
+            raise LayoutTooLarge(f"the shapes of layers {sorted(pairs)} under {cell.name!r} do not fit in this machine's memory "
+                                 f"when merged ({str(exc).strip()}): choose a smaller region (--top a sub-cell) or more memory") from None
+        raise
     if not np.any(area > 0):
         want = ", ".join(f"{l}/{d}" for l, d in sorted(pairs))
-        raise ValueError(f"layers {want} have no shapes under top cell {cell.name!r} (an empty layer); "
-                         f"the file's layers are: {listing}")
-    area_m = np.clip(area, 0.0, float(w) * w) * dbu * dbu
-    length_m = length * dbu
+        raise ValueError(f"layers {want} have no shapes in the windows of top cell {cell.name!r} (an empty layer)")
+    w = grid.w
+    full = float(w) * w
+    # sums of pasted windows carry float noise (~1e-4 dbu^2 on 1e12); a real piece of a shape in a
+    # window has at least ~1 dbu^2 of area and 1 dbu of outline: snap the noise of empty and full windows
+    area = np.where(np.abs(area) < 1e-3, 0.0, np.where(np.abs(area - full) < 1e-3, full, area))
+    length = np.where(np.abs(length) < 1e-3, 0.0, length)
+    area_m = np.clip(area, 0.0, full) * dbu * dbu
+    length_m = np.maximum(length, 0.0) * dbu
     window_m = w * dbu
-    density, width, space = window_fields(area_m, length_m, window_m)
+    _, width, space = window_fields(area_m, length_m, window_m)
+    density = np.clip(area, 0.0, full) / full  # in dbu^2: a full window is exactly 1
+    bx0, by0, bx1, by1 = box
     return LayoutWindows(
-        x=(ox + (np.arange(nx) + 0.5) * w) * dbu,
-        y=(oy + (np.arange(ny) + 0.5) * w) * dbu,
+        x=(grid.ox + (np.arange(grid.nx) + 0.5) * w) * dbu,
+        y=(grid.oy + (np.arange(grid.ny) + 0.5) * w) * dbu,
         density=density, width=width, space=space, boundary=length_m,
-        window=window_m, origin=(ox * dbu, oy * dbu),
+        window=window_m, origin=(grid.ox * dbu, grid.oy * dbu),
         bbox=(bx0 * dbu, by0 * dbu, bx1 * dbu, by1 * dbu),
         layers=tuple(sorted(pairs)), top=cell.name, dbu=dbu,
     )
+
+
+def _threads() -> int:
+    return max(1, min(2, os.cpu_count() or 1))
+
+
+def extract_windows(layout: Layout | str | os.PathLike, layers, window: float, *, top: str | None = None,
+                    pdk: str | None = None, layer_map=None, origin: tuple[float, float] | None = None,
+                    big: int | None = None, progress=None, stats: dict | None = None) -> LayoutWindows:
+    """Density, line width and line space per window of the merged shapes of ``layers``.
+
+    ``layout`` is a :class:`Layout` or a path (.gds, .gds.gz, .oas; read with KLayout);
+    ``layers`` one or several specs (``"68/20"``, ``(68, 20)`` or a name resolved with
+    ``pdk``/``layer_map``, see :mod:`.layermaps`), all merged; ``window`` the window side (m,
+    a whole number of database units, at most the die's width and height); ``top`` the cell
+    (required when the file has several top-level cells); ``origin`` the lower-left corner of
+    the grid (m, default the top cell's bounding-box corner); ``big`` the size (in windows)
+    from which a placed cell is merged once and pasted (:mod:`.hierarchy`; the result is the
+    same, only the time differs); ``progress`` a callable told (stage, done, total);
+    ``stats`` a dict that receives what the engine did.
+
+    Raises ValueError (naming the parameter and the valid values) for a layer the file
+    lacks, layers without shapes under the top cell, or a window larger than the die, and
+    :class:`LayoutTooLarge` when the grid or the merge does not fit the machine.
+    """
+    if not isinstance(layout, Layout):
+        layout = read_layout(layout)
+    cell = top_cell(layout, top)
+    pairs = _pairs(layout, cell, layers, pdk, layer_map)
+    grid, box = _grid(layout, cell, window, origin)
+    return _windows(layout, cell, pairs, grid, box, _threads(), big, progress, stats)
+
+
+def extract_levels(layout: Layout | str | os.PathLike, levels, window: float, *, top: str | None = None,
+                   pdk: str | None = None, layer_map=None, origin: tuple[float, float] | None = None,
+                   big: int | None = None, progress=None) -> list[LayoutWindows]:
+    """:func:`extract_windows` for several levels (each a layer spec or a list of them) on one
+    read of the file, one window grid and one store of KLayout's hierarchy. Every level's
+    layers are checked before any is extracted."""
+    if not isinstance(layout, Layout):
+        layout = read_layout(layout)
+    cell = top_cell(layout, top)
+    all_pairs = [_pairs(layout, cell, spec, pdk, layer_map) for spec in levels]
+    grid, box = _grid(layout, cell, window, origin)
+    out = []
+    for k, pairs in enumerate(all_pairs):
+        def told(stage, done, total, k=k):
+            if progress:
+                progress(f"level {k + 1}/{len(all_pairs)}: {stage}", done, total)
+        out.append(_windows(layout, cell, pairs, grid, box, _threads(), big, told if progress else None, None))
+    return out

@@ -1,41 +1,56 @@
-"""Open GDSII (``.gds``, ``.gds.gz``) and OASIS (``.oas``) layouts with gdstk.
+"""Open a layout as KLayout does: GDSII, gzipped GDSII, OASIS (``klayout.db``).
 
-The format is recognised from the file's first bytes (GDSII's HEADER record, OASIS's
-``%SEMI-OASIS`` magic, gzip's magic), not from its name.  The geometry is read in database
-units (``unit`` = the file's precision), so every coordinate is an integer number of dbu;
-:attr:`Layout.dbu` is that unit in metres.
+KLayout's reader is the field's own: it reads GDSII (plain or gzipped), OASIS with CBLOCKs
+and strict mode, arrays, every placement transformation (mirrored, rotated, magnified,
+non-Manhattan), paths (turned into polygons where shapes are wanted), texts and properties
+(never shapes), and the ``$$$CONTEXT_INFO$$$`` cell that KLayout and gdsfactory write for
+PCells and library references (it is read as metadata, not as a cell).  The format is
+recognised from the file's first bytes (GDSII's HEADER record, OASIS's ``%SEMI-OASIS``
+magic, gzip's magic), not from its name.
+
+Coordinates stay in database units (``dbu``, integers); :attr:`Layout.dbu` is that unit in
+metres.  KLayout (``klayout`` on the package index) is GPL-3.0-or-later; cmpsim's own code
+is MIT (README).
 """
 
 from __future__ import annotations
 
 import gzip
 import os
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-import gdstk
+import klayout.db as kdb
 
-__all__ = ["Layout", "read_layout", "top_cell", "layers_in"]
+__all__ = ["Layout", "read_layout", "top_cell", "layers_in", "LayoutTooLarge"]
 
 _GDS_MAGIC = b"\x00\x06\x00\x02"
 _OAS_MAGIC = b"%SEMI-OASIS\r\n"
 _GZ_MAGIC = b"\x1f\x8b"
+_WHAT = "expected GDSII (.gds), gzipped GDSII (.gds.gz) or OASIS (.oas)"
 
 
-@dataclass(frozen=True)
+class LayoutTooLarge(ValueError):
+    """A layout (or its window grid) that does not fit the machine: the message names the limit
+    and what to do (a larger ``--window``, a smaller region, more memory)."""
+
+
+@dataclass(frozen=True, eq=False)
 class Layout:
-    """A layout read by gdstk: its library (coordinates in dbu), the file and its format.
+    """A layout read by KLayout: the database (coordinates in dbu), the file and its format.
 
-    ``dbu`` is the database unit in metres (1e-9 for a 1 nm grid); ``format`` is
-    ``"gds"``, ``"gds.gz"`` or ``"oas"``.
+    ``db`` is the :class:`klayout.db.Layout`; ``dbu`` the database unit in metres (1e-9 for a
+    1 nm grid); ``format`` is ``"gds"``, ``"gds.gz"`` or ``"oas"``.
     """
 
-    library: gdstk.Library
+    db: kdb.Layout
     path: Path
     format: str
     dbu: float
+
+    @property
+    def name(self) -> str:
+        return self.path.name
 
 
 def _sniff(head: bytes) -> str | None:
@@ -49,77 +64,88 @@ def _sniff(head: bytes) -> str | None:
 
 
 def read_layout(path: str | os.PathLike) -> Layout:
-    """Read a GDSII, gzipped GDSII or OASIS file.
+    """Read a GDSII, gzipped GDSII or OASIS file with KLayout.
 
-    Raises FileNotFoundError if ``path`` does not exist and ValueError if it is not a
-    GDSII/OASIS layout (the message names the parameter and the accepted formats).
+    Raises FileNotFoundError if ``path`` does not exist, ValueError if it is not a
+    GDSII/OASIS layout or cannot be read (the message names the file and the accepted
+    formats), and :class:`LayoutTooLarge` if the machine runs out of memory reading it.
     """
     p = Path(path)
     if not p.is_file():
         raise FileNotFoundError(f"layout path {str(p)!r} does not exist (expected a .gds, .gds.gz or .oas file)")
     with open(p, "rb") as fh:
         kind = _sniff(fh.read(16))
-    what = "expected GDSII (.gds), gzipped GDSII (.gds.gz) or OASIS (.oas)"
     if kind is None:
-        raise ValueError(f"layout path {str(p)!r} is not a layout file: {what}")
+        raise ValueError(f"layout path {str(p)!r} is not a layout file: {_WHAT}")
+    fmt = kind
+    if kind == "gz":
+        try:
+            with gzip.open(p, "rb") as fh:
+                inner = _sniff(fh.read(16))
+        except OSError as exc:
+            raise ValueError(f"layout path {str(p)!r} is a broken gzip stream ({exc}): {_WHAT}") from None
+        if inner != "gds":
+            raise ValueError(f"layout path {str(p)!r} is gzip but not gzipped GDSII: {_WHAT}")
+        fmt = "gds.gz"
+    db = kdb.Layout()
+    options = kdb.LoadLayoutOptions()
+    options.text_enabled = False  # texts are never shapes
+    options.properties_enabled = False
     try:
-        if kind == "gz":
-            with tempfile.TemporaryDirectory() as tmp:
-                raw = Path(tmp) / "layout"
-                with gzip.open(p, "rb") as src, open(raw, "wb") as dst:
-                    shutil.copyfileobj(src, dst)
-                with open(raw, "rb") as fh:
-                    inner = _sniff(fh.read(16))
-                if inner != "gds":
-                    raise ValueError(f"layout path {str(p)!r} is gzip but not gzipped GDSII: {what}")
-                lib = _read_gds(raw)
-                fmt = "gds.gz"
-        elif kind == "gds":
-            lib, fmt = _read_gds(p), "gds"
-        else:
-            precision = gdstk.oas_precision(str(p))
-            lib, fmt = gdstk.read_oas(str(p), unit=precision), "oas"
-    except ValueError:
-        raise
-    except Exception as exc:  # gdstk raises OSError/RuntimeError on a broken stream
-        raise ValueError(f"layout path {str(p)!r} could not be read as a layout ({exc}): {what}") from exc
-    return Layout(library=lib, path=p, format=fmt, dbu=float(lib.unit))
+        db.read(str(p), options)
+    except MemoryError:
+        raise LayoutTooLarge(f"layout path {str(p)!r} does not fit in this machine's memory; "
+                             "cut the region of interest out of it (klayout -> Save As with a clip) or use a larger machine") from None
+    except RuntimeError as exc:
+        msg = str(exc)
+        if "bad_alloc" in msg or "memory" in msg.lower():
+            raise LayoutTooLarge(f"layout path {str(p)!r} does not fit in this machine's memory ({msg.strip()}); "
+                                 "cut the region of interest out of it or use a larger machine") from None
+        raise ValueError(f"layout path {str(p)!r} could not be read as a layout ({msg.strip()}): {_WHAT}") from None
+    # KLayout keeps the unit in micrometres (0.001): read as a decimal, 1e-9 m stays exactly 1e-9
+    return Layout(db=db, path=p, format=fmt, dbu=float(f"{db.dbu!r}e-6"))
 
 
-def _read_gds(path: Path) -> gdstk.Library:
-    _unit, precision = gdstk.gds_units(str(path))
-    return gdstk.read_gds(str(path), unit=precision)
+def top_cell(layout: Layout, top: str | None = None) -> kdb.Cell:
+    """The die: the cell named ``top``, else the file's only top-level cell.
 
-
-def top_cell(layout: Layout, top: str | None = None) -> gdstk.Cell:
-    """The cell to extract: ``top`` by name, else the file's only top-level cell.
-
-    Raises ValueError naming ``top`` and listing the valid names when ``top`` is unknown
-    or when the file has several top-level cells and ``top`` was not given.
+    Raises ValueError naming ``--top`` (``top=`` in Python) and listing the valid names when
+    ``top`` is unknown or when the file has several top-level cells and ``top`` was not given.
+    KLayout's ``$$$CONTEXT_INFO$$$`` cell is metadata, never a top cell.
     """
-    lib = layout.library
-    cells = {c.name: c for c in lib.cells if isinstance(c, gdstk.Cell)}
-    tops = sorted(c.name for c in lib.top_level() if isinstance(c, gdstk.Cell))
+    db = layout.db
+    tops = sorted(c.name for c in db.top_cells())
     if top is not None:
-        if top not in cells:
-            raise ValueError(f"top cell {top!r} is not in {layout.path.name}; "
-                             f"its top-level cells are {tops} ({len(cells)} cells in all)")
-        return cells[top]
+        cell = db.cell(str(top))
+        if cell is None:
+            raise ValueError(f"--top {top!r}: no such cell in {layout.name}; its top-level cells are {tops} "
+                             f"({db.cells()} cells in all)")
+        return cell
     if not tops:
-        raise ValueError(f"layout {layout.path.name} has no cells")
+        raise ValueError(f"layout {layout.name} has no cells")
     if len(tops) > 1:
-        raise ValueError(f"layout {layout.path.name} has {len(tops)} top-level cells {tops}: "
-                         "choose one with top=NAME")
-    return cells[tops[0]]
+        raise ValueError(f"layout {layout.name} has {len(tops)} top-level cells {tops}: "
+                         "choose the die with --top NAME (top=NAME in Python)")
+    return db.cell(tops[0])
 
 
-def layers_in(layout: Layout) -> set[tuple[int, int]]:
-    """Every (layer, datatype) that carries a polygon or path anywhere in the file."""
+def layers_in(layout: Layout, cell: kdb.Cell | None = None) -> set[tuple[int, int]]:
+    """Every (layer, datatype) that carries a shape under ``cell`` (default: any top cell)."""
+    db = layout.db
+    cells = [cell] if cell is not None else list(db.top_cells())
     found: set[tuple[int, int]] = set()
-    for cell in layout.library.cells:
-        if not isinstance(cell, gdstk.Cell):
-            continue
-        found.update((p.layer, p.datatype) for p in cell.polygons)
-        for path in cell.paths:
-            found.update(zip(path.layers, path.datatypes))
+    for li in db.layer_indexes():
+        info = db.get_info(li)
+        if any(not c.bbox(li).empty() for c in cells):
+            found.add((int(info.layer), int(info.datatype)))
     return found
+
+
+def layer_indexes(layout: Layout, pairs) -> list[int]:
+    """KLayout's layer indexes of the (layer, datatype) pairs the file has (others skipped)."""
+    out = []
+    for l, d in sorted(set(pairs)):
+        li = layout.db.find_layer(int(l), int(d))
+        if li is not None:
+            out.append(li)
+    return out

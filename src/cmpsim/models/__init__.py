@@ -11,6 +11,7 @@ input                     values -> class                                  proto
 ``cavitation``            :data:`CAVITATION_MODELS` (none, gumbel, jfo)    :class:`~cmpsim.models.base.CavitationModel`
 ``removal_law``           :data:`REMOVAL_LAWS` (paper, ..., abrasive)      :class:`~cmpsim.models.base.RemovalLaw`
 ``carrier``               :data:`CARRIERS` (rigid, membrane)               :class:`~cmpsim.models.base.CarrierModel`
+``film_chemistry``        :data:`FILM_CHEMISTRIES` (none, additive)        :class:`~cmpsim.models.base.FilmChemistry`
 ========================  ==============================================  =====================================
 
 :mod:`cmpsim.solver.setup` builds the models of a Config with the functions below; the solver and
@@ -22,8 +23,9 @@ from __future__ import annotations
 import numpy as np
 
 from ..operators.cavitation import VACUUM_GAUGE_PRESSURE
-from .base import CarrierModel, CavitationModel, PadModel, RemovalLaw, SlurryModel
+from .base import CarrierModel, CavitationModel, FilmChemistry, PadModel, RemovalLaw, SlurryModel
 from .carriers import MembraneCarrier, RigidCarrier
+from .chemistry import AdditiveChemistry, NoChemistry
 from .pads import LayerPad, RigidPad, WinklerPad
 from .removal_laws import AbrasiveRemovalLaw, PaperRemovalLaw, ShearPowerRemovalLaw
 from .slurries import GranularSlurry, GumbelCavitation, JFOCavitation, NewtonianSlurry, NoCavitation
@@ -34,16 +36,19 @@ __all__ = [
     "CAVITATION_MODELS",
     "REMOVAL_LAWS",
     "CARRIERS",
+    "FILM_CHEMISTRIES",
     "pad_model",
     "pad_for_foundation",
     "slurry_model",
     "removal_law",
     "carrier",
+    "film_chemistry",
     "PadModel",
     "SlurryModel",
     "CavitationModel",
     "RemovalLaw",
     "CarrierModel",
+    "FilmChemistry",
 ]
 
 #: ``pad_compliance`` -> pad model class.
@@ -56,6 +61,8 @@ CAVITATION_MODELS: dict[str, type] = {"none": NoCavitation, "gumbel": GumbelCavi
 REMOVAL_LAWS: dict[str, type] = {"paper": PaperRemovalLaw, "shear_power": ShearPowerRemovalLaw, "abrasive": AbrasiveRemovalLaw}
 #: ``carrier`` -> carrier model class.
 CARRIERS: dict[str, type] = {"rigid": RigidCarrier, "membrane": MembraneCarrier}
+#: ``film_chemistry`` -> film chemistry class (what the slurry's chemistry adds to the mechanical rate).
+FILM_CHEMISTRIES: dict[str, type] = {"none": NoChemistry, "additive": AdditiveChemistry}
 
 
 def _pick(registry: dict, option: str, name: str) -> type:
@@ -104,8 +111,15 @@ def slurry_model(name: str, cavitation: str = "none", cavitation_pressure=None, 
 
 
 def removal_law(config) -> RemovalLaw:
-    """The removal law of a Config (``removal_law``, with its coefficients)."""
-    return _pick(REMOVAL_LAWS, "removal_law", config.removal_law).from_config(config)
+    """The removal law of a Config (``removal_law``, with its coefficients), with the film chemistry
+    of ``film_chemistry`` added for the film ``film`` (``"none"``: the mechanical law itself)."""
+    law = _pick(REMOVAL_LAWS, "removal_law", config.removal_law).from_config(config)
+    return film_chemistry(config).wrap(law)
+
+
+def film_chemistry(config) -> FilmChemistry:
+    """The film chemistry of a Config (``film_chemistry``, with the constants of its ``film``)."""
+    return _pick(FILM_CHEMISTRIES, "film_chemistry", config.film_chemistry).from_config(config)
 
 
 def carrier(config="rigid") -> CarrierModel:

@@ -14,7 +14,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["PadModel", "SlurryModel", "CavitationModel", "RemovalLaw", "CarrierModel"]
+__all__ = ["PadModel", "SlurryModel", "CavitationModel", "RemovalLaw", "CarrierModel", "FilmChemistry"]
 
 
 @runtime_checkable
@@ -186,3 +186,14 @@ class CarrierModel(Protocol):
     def equilibrium(self, problem, solve, start=None, **options):
         """The :class:`~cmpsim.operators.state.EquilibriumSolution` of ``problem``, with ``solve`` (Newton on the
         rigid-body unknowns, :func:`cmpsim.solver.equilibrium.solve_equilibrium`) doing the rigid-body part."""
+
+
+@runtime_checkable
+class FilmChemistry(Protocol):
+    """What the slurry's chemistry adds to the mechanical removal rate of the film (``film_chemistry``).
+    Implementations: :mod:`cmpsim.models.chemistry`."""
+
+    name: str
+
+    def wrap(self, law: RemovalLaw) -> RemovalLaw:
+        """The removal law with this chemistry (the same protocol); ``law`` itself when it adds nothing."""

@@ -531,7 +531,7 @@ def ic1000_layers(top_thickness: float = 1.27e-3, subpad_thickness: float = 1.27
 
 def polisher_column(wafer_radius: float, centre_distance: float, slurry_flow_rate: float = 2.5e-6, *, platen: str = "sink",
                     slurry_temperature: float = 293.15, constants: ThermalConstants = THERMAL, wet: bool = False,
-                    cells: int = 40) -> ThermalColumn:
+                    cells: int = 40, surface_coefficient: float | None = None) -> ThermalColumn:
     """The default column of a polisher (eq. P4): IC1000 stack (:func:`ic1000_layers`), the area-mean
     duty R/(4d) of the wafer track, the slurry's flow coefficient rho_w c_w Q / (4 pi d R) and a
     silicon wafer (775 um) on an adiabatic carrier.
@@ -539,12 +539,17 @@ def polisher_column(wafer_radius: float, centre_distance: float, slurry_flow_rat
     ``wafer_radius`` R and ``centre_distance`` d in m, ``slurry_flow_rate`` Q in m^3/s (150 mL/min,
     US 9,499,721 B2's recipe); ``platen`` "sink" (the platen, a water-cooled aluminium mass, holds
     the subpad's bottom at the slurry temperature) or "adiabatic" (an insulating subpad): the two
-    bound the measured thermal time constants (``docs/polisher.md``).
+    bound the measured thermal time constants (``docs/polisher.md``). ``surface_coefficient`` (W/(m^2 K),
+    per unit track area): h_s given (a calibrated heat removal) instead of the slurry flow's.
     """
     if platen not in ("sink", "adiabatic"):
         raise ValueError(f"platen must be 'sink' or 'adiabatic'; got {platen!r}")
     f = mean_wafer_duty(wafer_radius, centre_distance)
     hs = float(slurry_heat_transfer_coefficient(slurry_flow_rate, 4.0 * np.pi * centre_distance * wafer_radius, constants.water_volumetric_heat_capacity))
+    if surface_coefficient is not None:
+        if not (math.isfinite(surface_coefficient) and surface_coefficient >= 0):
+            raise ValueError(f"surface_coefficient must be >= 0 W/(m^2 K); got {surface_coefficient!r}")
+        hs = float(surface_coefficient)
     return pad_column(ic1000_layers(constants=constants, wet=wet, cells=cells), duty=f, surface_coefficient=hs,
                       platen_coefficient=math.inf if platen == "sink" else 0.0, wafer_heat_capacity=constants.wafer_heat_capacity,
                       slurry_temperature=slurry_temperature)

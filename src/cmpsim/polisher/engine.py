@@ -265,9 +265,10 @@ class PolishResult:
 
 
 def _column(config: Config, cache: dict) -> ThermalColumn:
-    key = (0.5 * config.wafer_diameter, config.centre_distance, config.slurry_temperature)
+    hs = getattr(config, "pad_heat_transfer_coefficient", 0.0) or None  # 0: from the slurry flow
+    key = (0.5 * config.wafer_diameter, config.centre_distance, config.slurry_temperature, hs)
     if key not in cache:
-        cache[key] = polisher_column(key[0], key[1], SLURRY_FLOW_RATE, platen=PLATEN, slurry_temperature=key[2])
+        cache[key] = polisher_column(key[0], key[1], SLURRY_FLOW_RATE, platen=PLATEN, slurry_temperature=key[2], surface_coefficient=hs)
     return cache[key]
 
 

@@ -113,6 +113,7 @@ def validate(paths=None, config: Config | None = None, grid: str | None = None, 
     points: list[PointResult] = []
     summaries: list[DatasetSummary] = []
     n_eq = 0
+    kept = {}
     with Progress(progress, total, "validate") as bar:
         for ds in datasets:
             values, results, statuses, solved = solve_points(ds.points, config, advance=bar.advance)
@@ -120,4 +121,5 @@ def validate(paths=None, config: Config | None = None, grid: str | None = None, 
             points.extend(rows)
             summaries.append(summary)
             n_eq += solved
-    return ValidationReport(points, summaries, config, equilibria=n_eq, elapsed_s=time.perf_counter() - t0)
+            kept[ds.name] = (ds, values, results)
+    return ValidationReport(points, summaries, config, equilibria=n_eq, elapsed_s=time.perf_counter() - t0, solved=kept)

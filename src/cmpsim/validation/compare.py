@@ -10,14 +10,35 @@ import numpy as np
 
 from ..inputs.config import Config
 from ..solver.points import PointCache
-from .data import ORDER_TOLERANCE_DECADES, QUANTITIES, Dataset, from_si, point_config
+from .data import DEPTH_QUANTITIES, ORDER_TOLERANCE_DECADES, QUANTITIES, Dataset, from_si, point_config
 
 __all__ = ["PointResult", "DatasetSummary", "model_value", "fit_scale", "evaluate_dataset", "solve_points", "run_dataset"]
 
 
-def model_value(result, quantity: str) -> float:
-    """The model's value of a measurable quantity, SI."""
-    return float(QUANTITIES[quantity][3](result))
+def model_value(result, quantity: str, where: dict | None = None) -> float:
+    """The model's value of a measurable quantity, SI; ``where`` (SI) places it: ``radius`` (m) reads the
+    rotation-averaged removal-rate profile there, ``time`` (s) and ``initial_thickness`` (m) make a
+    removal rate a ``removal`` depth or a remaining ``thickness`` (:data:`cmpsim.validation.data.DEPTH_QUANTITIES`)."""
+    where = where or {}
+    if "radius" not in where and quantity in QUANTITIES:
+        return float(QUANTITIES[quantity][3](result))
+    rate = removal_rate_at(result, where.get("radius"))
+    if quantity not in DEPTH_QUANTITIES:
+        return rate
+    depth = rate * where["time"]
+    return depth if quantity == "removal" else max(where["initial_thickness"] - depth, 0.0)
+
+
+def removal_rate_at(result, radius: float | None) -> float:
+    """The removal rate, m/s: the wafer mean, or the rotation-averaged profile at ``radius`` (m, linear
+    between ring centres, the centre ring's value inside it); ValueError beyond the wafer."""
+    if radius is None:
+        return float(result.scalars["removal_rate_mean"])
+    r = np.asarray(result.profiles["radius"], dtype=float)
+    wafer = 0.5 * result.config.wafer_diameter
+    if radius > wafer * (1 + 1e-9):
+        raise ValueError(f"radius {radius:g} m lies beyond the wafer (radius {wafer:g} m, wafer_diameter = {result.config.wafer_diameter:g} m)")
+    return float(np.interp(radius, r, np.asarray(result.profiles["removal_rate_profile"], dtype=float)))
 
 
 def fit_scale(model: np.ndarray, data: np.ndarray, weights: np.ndarray | None = None) -> float:
@@ -265,7 +286,10 @@ def solve_points(points, config: Config, relative: bool = False, warm: dict | No
             previous = res.solution.state.u
             if warm is not None:
                 warm[key] = previous
-            values.append(model_value(res, p.quantity))
+            try:
+                values.append(model_value(res, p.quantity, p.where))
+            except ValueError as exc:
+                raise ValueError(f"{p.dataset}, row {p.row} (line {p.line}), column 'radius': {exc}") from None
             results.append(res)
             floored = res.scalars["flow_factor_floored_fraction"]
             statuses.append("ok" if floored == 0 else f"ok (flow factors regularised on {100 * floored:.0f} % of faces)")

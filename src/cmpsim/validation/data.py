@@ -25,6 +25,10 @@ __all__ = [
     "QUANTITY_ALIASES",
     "MEASURABLE_OUTPUTS",
     "COMPARISONS",
+    "DEPTH_QUANTITIES",
+    "POINT_COLUMNS",
+    "PROFILE_QUANTITIES",
+    "quantity_unit",
     "DataError",
     "DataPoint",
     "Dataset",
@@ -44,6 +48,11 @@ ORDER_TOLERANCE_DECADES = 0.5
 META_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "comparison", "source", "label", "note")
 #: Extra condition columns (not cmpsim parameters) that are converted on reading.
 EXTRA_CONDITIONS = {"sliding_speed": "m/s"}
+#: Columns that place a point on the wafer or in time (SI unit): not operating conditions, so points
+#: that differ only in them share one equilibrium. ``radius`` (or ``x`` and ``y``) reads the rotation-
+#: averaged removal-rate profile there; ``time`` (polish time) and ``initial_thickness`` turn a rate into
+#: a ``removal`` depth or a remaining ``thickness``.
+POINT_COLUMNS = {"radius": "m", "x": "m", "y": "m", "time": "s", "initial_thickness": "m"}
 
 
 def _film_max(result) -> float:
@@ -106,13 +115,35 @@ QUANTITIES: dict[str, tuple[str, str, str, Callable[[Any], float]]] = {
 }
 
 
+#: Quantities of a blanket film polished for a ``time`` (wafer mean, or at a ``radius``): quantity ->
+#: (SI unit for pint, display unit, description, the point columns it needs). The model value is the
+#: removal rate there times the time (``removal``), or ``initial_thickness`` less it (``thickness``,
+#: not below 0): the rate of the solved equilibrium held through the time (a blanket polish).
+DEPTH_QUANTITIES: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
+    "removal": ("m", "nm", "depth of film removed in the polish time (blanket, at the solved rate)", ("time",)),
+    "thickness": ("m", "nm", "film thickness left after the polish time (initial_thickness - rate x time, >= 0)", ("time", "initial_thickness")),
+}
+#: Quantities that may be given at a ``radius`` (or ``x``, ``y``): the removal rate and the depths.
+PROFILE_QUANTITIES = ("removal_rate", "removal_rate_mean", "removal", "thickness")
+
+
+def quantity_unit(quantity: str) -> str:
+    """The SI (pint) unit of a measurable quantity."""
+    return QUANTITIES[quantity][0] if quantity in QUANTITIES else DEPTH_QUANTITIES[quantity][0]
+
+
+def known_quantities() -> tuple[str, ...]:
+    """Every quantity a data file may give."""
+    return tuple(QUANTITIES) + tuple(DEPTH_QUANTITIES)
+
+
 class DataError(ValueError):
-    """A data file that cannot be read; the message names the file, line and problem."""
+    """A data file that cannot be read; the message names the file, the row and column, and the problem."""
 
 
 def to_si(value: float, unit: str, quantity: str) -> float:
     """``value`` in ``unit`` converted to the SI unit of ``quantity`` (ValueError if incompatible)."""
-    target = QUANTITIES[quantity][0]
+    target = quantity_unit(quantity)
     try:
         return units.convert(value, unit, target)
     except Exception as exc:
@@ -123,7 +154,7 @@ def from_si(value: float, unit: str, quantity: str) -> float:
     """SI value of ``quantity`` expressed in ``unit``."""
     if value is None or not np.isfinite(value):
         return float("nan")
-    return units.convert(value, QUANTITIES[quantity][0], unit)
+    return units.convert(value, quantity_unit(quantity), unit)
 
 
 # --------------------------------------------------------------------------- data model
@@ -141,6 +172,10 @@ class DataPoint:
     source: str = ""
     line: int = 0
     label: str = ""
+    #: where and when on the wafer, SI: ``radius`` (m, from x and y if given that way), ``time`` (s), ``initial_thickness`` (m)
+    where: dict[str, float] = field(default_factory=dict)
+    #: the data row (1 = the first row after the header)
+    row: int = 0
 
     @property
     def value_si(self) -> float:
@@ -153,7 +188,20 @@ class DataPoint:
         return to_si(self.uncertainty, self.unit, self.quantity) - to_si(0.0, self.unit, self.quantity)
 
     def conditions_text(self) -> str:
-        return ", ".join(f"{k}={v}" for k, v in self.conditions.items()) or "(base case)"
+        text = ", ".join(f"{k}={v}" for k, v in self.conditions.items()) or "(base case)"
+        extra = [f"{k}={_short(v, POINT_COLUMNS[k])}" for k, v in self.where.items()]
+        return ", ".join([text] + extra) if extra else text
+
+    @property
+    def film(self) -> str | None:
+        """The film of the point's ``film`` column (None: the configuration's)."""
+        return self.conditions.get("film")
+
+
+def _short(value: float, unit: str) -> str:
+    if unit == "m":
+        return f"{value * 1e3:g} mm" if value >= 1e-3 else f"{value * 1e9:g} nm"
+    return f"{value:g} s"
 
 
 @dataclass
@@ -236,57 +284,78 @@ def load_datasets(path) -> list[Dataset]:
     if len(set(header)) != len(header):
         raise DataError(f"{where0}: duplicate column names in the header")
     for col in header:
-        if col in META_COLUMNS or col in EXTRA_CONDITIONS:
+        if col in META_COLUMNS or col in EXTRA_CONDITIONS or col in POINT_COLUMNS:
             continue
         if col not in PARAMETERS:
             raise DataError(
-                f"{where0}: unknown column {col!r}: condition columns must be cmpsim parameter names "
-                f"(see `cmpsim params`) or {', '.join(EXTRA_CONDITIONS)}"
+                f"{where0}: header, column {col!r}: unknown column {col!r}: condition columns must be cmpsim parameter names "
+                f"(see `cmpsim params`), {', '.join(EXTRA_CONDITIONS)}, or the position and time columns {', '.join(POINT_COLUMNS)}"
             )
         if PARAMETERS[col].section == "numerics" and col != "model":
-            raise DataError(f"{where0}: column {col!r} is a numerical setting, not an operating condition")
+            raise DataError(f"{where0}: header, column {col!r}: column {col!r} is a numerical setting, not an operating condition")
+    if ("x" in header) != ("y" in header):
+        raise DataError(f"{where0}: header, column {'x' if 'x' in header else 'y'!r}: a position by x needs y too (or give radius)")
+    if "radius" in header and "x" in header:
+        raise DataError(f"{where0}: header, column 'radius': give radius or x and y, not both")
     default_name = meta.get("dataset") or path.stem
     default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,")
     datasets: dict[str, Dataset] = {}
     rows = csv.reader([t for _, t in body_lines[1:]])
-    for (lineno, _), row in zip(body_lines[1:], rows):
+    for row_no, ((lineno, _), row) in enumerate(zip(body_lines[1:], rows), start=1):
         where = f"{path}:{lineno}"
+
+        def bad(column: str, message: str) -> DataError:
+            return DataError(f"{path}:{lineno}: row {row_no}, column {column!r}: {message}")
+
         if len(row) != len(header):
-            raise DataError(f"{where}: {len(row)} fields but the header has {len(header)}")
+            raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}")
         rec = {h: c.strip() for h, c in zip(header, row)}
         quantity = rec["quantity"]
-        if quantity not in QUANTITIES:
-            raise DataError(f"{where}: unknown quantity {quantity!r}; known: {', '.join(QUANTITIES)}")
-        value = _parse_float(rec["value"], "value", where)
+        if quantity not in QUANTITIES and quantity not in DEPTH_QUANTITIES:
+            raise bad("quantity", f"unknown quantity {quantity!r}; known: {', '.join(known_quantities())}")
+        try:
+            value = _parse_float(rec["value"], "value", where)
+        except DataError as exc:
+            raise bad("value", str(exc).split(": ", 1)[1]) from None
         unit = rec["unit"]
         unc_text = rec.get("uncertainty", "")
         uncertainty = None
         if unc_text:
-            uncertainty = _parse_float(unc_text, "uncertainty", where)
+            try:
+                uncertainty = _parse_float(unc_text, "uncertainty", where)
+            except DataError as exc:
+                raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
             if uncertainty <= 0:
-                raise DataError(f"{where}: uncertainty must be > 0 (or empty); got {unc_text!r}")
+                raise bad("uncertainty", f"uncertainty must be > 0 (or empty); got {unc_text!r}")
         comparison = rec.get("comparison") or default_comparison
         if comparison not in COMPARISONS:
-            raise DataError(f"{where}: unknown comparison {comparison!r}; known: {', '.join(COMPARISONS)}")
+            raise bad("comparison", f"unknown comparison {comparison!r}; known: {', '.join(COMPARISONS)}")
         if comparison == "range" and uncertainty is None:
-            raise DataError(f"{where}: comparison 'range' needs the half-width of the range in the uncertainty column")
+            raise bad("uncertainty", "comparison 'range' needs the half-width of the range in the uncertainty column")
         if comparison in ("order", "shape") and value <= 0:
-            raise DataError(f"{where}: comparison {comparison!r} needs a positive value; got {value:g}")
+            raise bad("value", f"comparison {comparison!r} needs a positive value; got {value:g}")
         try:
             to_si(value, unit, quantity)
         except ValueError as exc:
-            raise DataError(f"{where}: {exc}") from None
+            raise bad("unit", str(exc)) from None
+        place = _point_place(rec, quantity, bad)
         conditions = {}
         for col in header:
-            if col in META_COLUMNS or not rec[col]:
+            if col in META_COLUMNS or col in POINT_COLUMNS or not rec[col]:
                 continue
             conditions[col] = rec[col]
+        base = Config.default()
+        for col, text in conditions.items():  # each column alone first: the error names it
+            try:
+                point_config(base, {col: text})
+            except ValueError as exc:
+                raise bad(col, str(exc)) from None
         try:
-            point_config(Config.default(), conditions)
+            point_config(base, conditions)
         except ValueError as exc:
-            raise DataError(f"{where}: {exc}") from None
+            raise bad(", ".join(conditions), str(exc)) from None
         name = rec.get("dataset") or default_name
-        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""))
+        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no)
         ds = datasets.setdefault(name, Dataset(name, [], dict(meta), path))
         ds.points.append(p)
     if not datasets:
@@ -301,6 +370,35 @@ def load_datasets(path) -> list[Dataset]:
             if len(ds.points) < 2:
                 raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
     return list(datasets.values())
+
+
+def _point_place(rec: dict, quantity: str, bad) -> dict[str, float]:
+    """The position and time columns of a row, SI (``x``, ``y`` become ``radius``); ``bad(column, message)`` makes the error."""
+    place: dict[str, float] = {}
+    for col, unit in POINT_COLUMNS.items():
+        text = rec.get(col, "")
+        if not text:
+            continue
+        try:
+            v = units.to_si(text, unit, col, example="mm" if unit == "m" else "s")
+        except ValueError as exc:
+            raise bad(col, str(exc)) from None
+        if not math.isfinite(v) or (col not in ("x", "y") and v < 0) or (col == "time" and v == 0):
+            raise bad(col, f"{col} must be {'> 0' if col == 'time' else '>= 0'} ({unit}); got {text!r}")
+        place[col] = float(v)
+    if ("x" in place) != ("y" in place):
+        raise bad("y" if "x" in place else "x", "a position by x needs y too (or give radius)")
+    if "x" in place:
+        place["radius"] = math.hypot(place.pop("x"), place.pop("y"))
+    if "radius" in place and quantity not in PROFILE_QUANTITIES:
+        raise bad("radius", f"a position on the wafer applies to {', '.join(PROFILE_QUANTITIES)}; {quantity!r} is a wafer value")
+    for col in DEPTH_QUANTITIES.get(quantity, ("", "", "", ()))[3]:
+        if col not in place:
+            raise bad(col, f"quantity {quantity!r} needs the {col} column ({POINT_COLUMNS[col]}; e.g. {'60 s' if col == 'time' else '1.2 um'})")
+    extra = [c for c in ("time", "initial_thickness") if c in place and c not in DEPTH_QUANTITIES.get(quantity, ("", "", "", ()))[3]]
+    if extra:
+        raise bad(extra[0], f"{extra[0]} applies to the quantities {', '.join(DEPTH_QUANTITIES)}; not to {quantity!r}")
+    return place
 
 
 def load_dataset(path) -> Dataset:

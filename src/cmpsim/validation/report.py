@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -13,7 +13,7 @@ import numpy as np
 from ..inputs.config import Config
 from ..tables import markdown_table, text_table
 from .compare import DatasetSummary, PointResult
-from .data import QUANTITIES, from_si, to_si
+from .data import DEPTH_QUANTITIES, QUANTITIES, from_si, to_si
 
 __all__ = ["ValidationReport"]
 
@@ -27,6 +27,10 @@ class ValidationReport:
     config: Config
     equilibria: int = 0
     elapsed_s: float = 0.0
+    #: data set name -> (its values SI, its solved results): what a study above (leave-one-out calibration) reuses
+    solved: dict = field(default_factory=dict, repr=False)
+    #: leave-one-out of the calibrated model per removal series (:func:`cmpsim.calibration.heldout.compare_with_preston`)
+    calibrated_loo: list = field(default_factory=list)
 
     def dataset(self, name: str) -> DatasetSummary:
         for d in self.datasets:
@@ -109,9 +113,12 @@ class ValidationReport:
 
         buf = io.StringIO()
         w = csv.writer(buf)
-        w.writerow(["dataset", "kind", "quantity", "comparison", "unit", "n", "n_solved", "rms_error", "rms_relative_error", "scale", "loo_rms_model", "loo_rms_mean", "loo_rms_preston", "verdict", "reason"])
+        w.writerow(["dataset", "kind", "quantity", "comparison", "unit", "n", "n_solved", "rms_error", "rms_relative_error", "scale", "loo_rms_model", "loo_rms_mean", "loo_rms_preston", "verdict", "reason"]
+                   + (["loo_rms_calibrated", "calibrated_inputs"] if self.calibrated_loo else []))
+        loo = {s.name: s for s in self.calibrated_loo}
         for d in self.datasets:
-            w.writerow([d.name, d.kind, d.quantity, d.comparison, d.unit, d.n, d.n_solved, _g(d.rms_error), _g(d.rms_relative_error), _g(d.scale), _g(d.loo_rms_model), _g(d.loo_rms_mean), _g(d.loo_rms_preston), d.verdict, d.reason])
+            extra = ([_g(loo[d.name].calibrated), " ".join(loo[d.name].inputs)] if d.name in loo else ["", ""]) if self.calibrated_loo else []
+            w.writerow([d.name, d.kind, d.quantity, d.comparison, d.unit, d.n, d.n_solved, _g(d.rms_error), _g(d.rms_relative_error), _g(d.scale), _g(d.loo_rms_model), _g(d.loo_rms_mean), _g(d.loo_rms_preston), d.verdict, d.reason] + extra)
         atomic_write_text(Path(path), buf.getvalue())
         return Path(path)
 
@@ -140,7 +147,7 @@ class ValidationReport:
         ds_names = [d.name for d in self.datasets]
         titles = {"film_thickness": "slurry film thickness", "contact_area_ratio": "real contact area / wafer area"}
         for ax, fam in zip(axes.flat, families):
-            disp = QUANTITIES[fam][1] if fam in QUANTITIES else QUANTITIES[fam + "_mean"][1]
+            disp = QUANTITIES[fam][1] if fam in QUANTITIES else (DEPTH_QUANTITIES[fam][1] if fam in DEPTH_QUANTITIES else QUANTITIES[fam + "_mean"][1])
             lo, hi = np.inf, -np.inf
             k = 0
             for d in self.datasets:
@@ -174,7 +181,7 @@ class ValidationReport:
             name = fam.replace("_", " ")
             ax.set_xlabel(f"data: {name} ({disp})")
             ax.set_ylabel(f"model: {name} ({disp})")
-            ax.set_title(titles.get(fam, QUANTITIES[fam][2] if fam in QUANTITIES else name), fontsize=9)
+            ax.set_title(titles.get(fam, QUANTITIES[fam][2] if fam in QUANTITIES else DEPTH_QUANTITIES.get(fam, ("", "", name))[2]), fontsize=9)
             ax.legend(fontsize=7)
         for ax in list(axes.flat)[len(quantities):]:
             ax.set_visible(False)

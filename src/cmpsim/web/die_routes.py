@@ -42,13 +42,13 @@ def die_parameter(message: str) -> str | None:
     m = message.lstrip()
     if m.startswith("layout path") or m.startswith("the layout") or (m.startswith("layout ") and "has no cells" in m):
         return "layout"
-    if m.startswith("top cell") or "top-level cells" in m:
+    if m.startswith("top cell") or m.startswith("--top") or "top-level cells" in m:
         return "top"
-    if m.startswith("layer"):  # a layer the file lacks, an empty layer, an unknown name
+    if m.startswith("layer") or m.startswith("--layer"):  # a layer the file lacks, an empty layer, an unknown name
         return "layer"
     if m.startswith("pdk"):
         return "pdk"
-    if m.startswith("window"):
+    if m.startswith("window") or m.startswith("--window"):
         return "window"
     if m.startswith("--spec"):
         return "spec"
@@ -169,11 +169,11 @@ def die_routes(limits: Limits, slots: JobSlots) -> APIRouter:
             try:
                 layout = read_layout(path)
                 cell = top_cell(layout, top)
-                box = cell.bounding_box()
+                box = cell.bbox()
                 w = round(window / layout.dbu)  # in database units, as the extraction counts
-                if box is not None and w > 0:
-                    nx = max(-(-round(box[1][0] - box[0][0]) // w), 1)
-                    ny = max(-(-round(box[1][1] - box[0][1]) // w), 1)
+                if not box.empty() and w > 0:
+                    nx = max(-(-box.width() // w), 1)
+                    ny = max(-(-box.height() // w), 1)
                     limits.check_windows(nx, ny, window)
                 die = layout_die(layout, layers, window, top=top, pdk=pdk)  # as `cmpsim die LAYOUT --layer ...`
                 result = simulate(die, time, config=config, blanket_rate=blanket_rate, process=process, weighting=weighting, spec=spec)
