@@ -1,6 +1,6 @@
 """The cost of a lot (issue 32: a 25-wafer controlled lot in at most 2 min).
 
-Run: python benchmarks/bench_lot.py [--wafers 25] [--grid default] [--control ewma] [--conditioning in_situ]
+Run: python benchmarks/bench_lot.py [--wafers 25] [--grid default] [--control ewma|single_ewma|none] [--conditioning in_situ]
 
 Polishes the issue's oxide recipe (src/cmpsim/data/recipe_oxide.toml) on the 300mm preset for a lot
 with seed 1 and prints the wall and CPU time, the solves, and the final thickness of every wafer
@@ -18,7 +18,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--wafers", type=int, default=25)
     ap.add_argument("--grid", default="default")
-    ap.add_argument("--control", default="ewma", choices=("none", "ewma"))
+    ap.add_argument("--control", default="ewma", choices=("none", "ewma", "single_ewma"))
     ap.add_argument("--conditioning", default="in_situ", choices=("none", "ex_situ", "in_situ"))
     args = ap.parse_args()
     from cmpsim.polisher.lot import run_lot

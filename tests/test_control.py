@@ -1,63 +1,62 @@
-"""The run-to-run controller of a lot and the incoming profiles (cmpsim.polisher.control, .incoming)."""
+"""The rate estimators of a lot's run-to-run control and the incoming profiles (cmpsim.polisher.control, .incoming).
+The double EWMA's drift, the zone feedback and the checkpoint are in tests/test_lot_control.py."""
 
 import numpy as np
 import pytest
 
-from cmpsim.polisher.control import ControllerState, EWMAController, area_weights, feed_forward_time, update_rate, zone_correction
+from cmpsim.polisher.control import CONTROL, ESTIMATORS, DoubleEWMA, RateEstimator, SingleEWMA, feed_forward_time, make_estimator
 from cmpsim.polisher.incoming import incoming_profiles
+from cmpsim.polisher.zones import area_weights
 
-PSI = 6894.757293168361
 
-
-def test_the_ewma_estimate_closes_on_a_step_change_of_the_rate_geometrically():
-    """After the rate jumps from r0 to r1 the estimate's error shrinks by (1 - lambda) per wafer."""
-    state, true_rate, w = ControllerState(rate=4e-9, zone_pressures=(3 * PSI,)), 3e-9, 0.3
+def test_the_single_ewma_closes_on_a_step_change_of_the_rate_geometrically():
+    """Eq. C1: after the rate jumps from r0 to r1 the estimate's error shrinks by (1 - lambda) per wafer."""
+    est, true_rate, w = SingleEWMA(level=4e-9, weight=0.3), 3e-9, 0.3
     errors = []
     for _ in range(8):
-        time = feed_forward_time(state, 1.0e-6, 0.5e-6)
-        state = update_rate(state, true_rate * time, time, w)
-        errors.append(state.rate - true_rate)
+        est = est.update(true_rate)
+        errors.append(est.predict() - true_rate)
     np.testing.assert_allclose(np.array(errors[1:]) / np.array(errors[:-1]), 1 - w, rtol=1e-12)
 
 
+def test_the_single_ewma_lags_a_linear_drift_by_delta_over_lambda():
+    """The lag the double EWMA removes (Chen & Guo 2001): on r_k = r_0 + delta k the single EWMA's
+    prediction for wafer k+1 settles at r_(k+1) - delta / lambda."""
+    delta, est = -2e-11, SingleEWMA(level=5e-9, weight=0.3)
+    for k in range(1, 200):
+        est = est.update(5e-9 + delta * k)
+    assert est.predict() - (5e-9 + delta * 200) == pytest.approx(-delta / 0.3, rel=1e-9)
+
+
 def test_feed_forward_hits_the_target_when_the_rate_is_known():
-    state = ControllerState(rate=5e-9, zone_pressures=(2 * PSI,))
     for incoming in (0.9e-6, 1.0e-6, 1.1e-6):
-        time = feed_forward_time(state, incoming, 0.5e-6)
+        time = feed_forward_time(5e-9, incoming, 0.5e-6)
         assert incoming - 5e-9 * time == pytest.approx(0.5e-6, rel=1e-12)
-    assert feed_forward_time(state, 0.4e-6, 0.5e-6) == 0.0  # already below target: no polish
+    assert feed_forward_time(5e-9, 0.4e-6, 0.5e-6) == 0.0  # already below target: no polish
 
 
-def test_the_zone_feedback_flattens_a_linear_plant():
-    """On a plant whose rate is exactly linear in the zone pressures, repeated feedback removes the
-    shape of the remaining thickness that the zones can reach (the mean is the polish time's job)."""
-    r = np.linspace(0.0, 0.15, 61)
-    centres = np.array([0.0, 0.05, 0.1, 0.14])
-    response = np.exp(-(((r[:, None] - centres[None, :]) / 0.03) ** 2)) * 1e-13  # m/s/Pa, overlapping
-    base = 4e-9 + response @ np.array([-0.1, 0.05, -0.35, 0.4]) * PSI  # the edge polishes fast: a shape the zones can undo at equal load
-    controller = EWMAController(target=0.5e-6, zone_weight=1.0, regularisation=1e-6)
-    state = ControllerState(rate=4e-9, zone_pressures=(3 * PSI,) * 4)
-    time, w = 60.0, area_weights(r)
-    spreads = []
-    for _ in range(6):
-        rate = base + response @ (np.array(state.zone_pressures) - 3 * PSI)
-        final = 1e-6 - rate * time
-        spreads.append(np.sqrt(np.sum(w * (final - np.sum(w * final)) ** 2)))
-        state = zone_correction(controller, state, w, final, response, time)
-    assert spreads[-1] < 1e-3 * spreads[0], spreads
-    assert state.zone_pressures != (3 * PSI,) * 4  # the controller moved the zones
-    assert sum(state.zone_pressures) == pytest.approx(4 * 3 * PSI, rel=1e-12)  # and kept the load (equal zone areas)
+def test_the_estimators_are_one_family_picked_by_name_in_one_place():
+    assert CONTROL == ("none", "ewma", "single_ewma")
+    for name, cls in ESTIMATORS.items():
+        est = make_estimator(name, 4e-9)
+        assert isinstance(est, cls) and isinstance(est, RateEstimator) and est.name == name
+        assert type(est)(**est.to_dict()) == est  # a checkpoint's round trip
+    assert isinstance(make_estimator("ewma", 4e-9), DoubleEWMA)  # the contract: --control ewma is the double EWMA
 
 
 def test_the_controller_refuses_bad_settings():
     with pytest.raises(ValueError, match="weight"):
-        EWMAController(target=5e-7, weight=0.0)
-    with pytest.raises(ValueError, match="target"):
-        EWMAController(target=-1e-9)
-    with pytest.raises(ValueError, match="bounds"):
-        EWMAController(target=5e-7, bounds=(3e4, 1e4))
+        make_estimator("ewma", 4e-9, weight=0.0)
+    with pytest.raises(ValueError, match="drift_weight"):
+        make_estimator("ewma", 4e-9, drift_weight=1.5)
+    with pytest.raises(ValueError, match="clock"):
+        make_estimator("ewma", 4e-9, clock="moon")
+    with pytest.raises(ValueError, match="control must be one of"):
+        make_estimator("pid", 4e-9)
     with pytest.raises(ValueError, match="rate"):
-        feed_forward_time(ControllerState(rate=0.0, zone_pressures=()), 1e-6, 5e-7)
+        feed_forward_time(0.0, 1e-6, 5e-7)
+    with pytest.raises(ValueError, match="first rate estimate"):
+        SingleEWMA(level=-1.0)
 
 
 def test_incoming_profiles_are_reproducible_and_spread_as_asked():

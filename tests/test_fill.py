@@ -1,7 +1,9 @@
 """Dummy fill: the rules, the free sites (never within the keep-out of a drawn shape, and only
 those), spacing, the window fields after fill against re-extraction, the GDS/OASIS files, and
 the model-based choice on a synthetic 10 x 10 mm floorplan of dense and sparse blocks. The
-layouts are built here with gdstk (nothing outside the suite)."""
+layouts are built here with gdstk (a test-only generator; nothing outside the suite); the keep-out
+is checked with gdstk's booleans and, independently of the fill's own code, with KLayout's
+separation check on the written fill file."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import json
 import math
 
 import gdstk
+import klayout.db as kdb
 import numpy as np
 import pytest
 
@@ -16,7 +19,7 @@ from cmpsim.die.fill import DEFAULT_LIMITS, die_layout, hotspot_count, plan_fill
 from cmpsim.die.polish import simulate
 from cmpsim.layout import extract_windows, read_layout, top_cell
 from cmpsim.layout.fill import (FILL_RULES, FillRules, fill_polygons, fill_rules, fill_sites, filled_windows,
-                                select_fill, write_fill)
+                                resolve_fill, select_fill, write_fill)
 
 UM = 1e-6
 NM = 1000  # dbu per um (1 nm database unit)
@@ -80,15 +83,39 @@ def chip(tmp_path_factory):
     return path, w, s
 
 
-def drawn_polygons(path, layer=(68, 20)):
-    cell = top_cell(read_layout(path))
+def drawn_polygons(path, layer=(68, 20), top="TOP"):
+    """The drawn shapes, flattened by gdstk (an engine independent of the fill's)."""
+    lib = gdstk.read_oas(str(path), unit=1e-9) if str(path).endswith(".oas") else gdstk.read_gds(str(path), unit=1e-9)
+    cell = next(c for c in lib.cells if c.name == top)
     return cell.get_polygons(layer=layer[0], datatype=layer[1])
+
+
+def rectangles(boxes, layer=36, datatype=28):
+    """gdstk rectangles of (n, 4) boxes."""
+    return [gdstk.rectangle((x0, y0), (x1, y1), layer=layer, datatype=datatype) for x0, y0, x1, y1 in np.asarray(boxes).tolist()]
+
+
+def klayout_boxes(path):
+    """Every shape of the file's top cell, flattened by KLayout: ((layer, datatype), bbox, is_box) per shape."""
+    ly = kdb.Layout()
+    ly.read(str(path))
+    (top,) = ly.top_cells()
+    out = []
+    for li in ly.layer_indexes():
+        info = ly.get_info(li)
+        it = top.begin_shapes_rec(li)
+        while not it.at_end():
+            shape = it.shape().polygon.transformed(it.trans())
+            b = shape.bbox()
+            out.append(((info.layer, info.datatype), (b.left, b.bottom, b.right, b.top), shape.is_box()))
+            it.next()
+    return out
 
 
 def square_boxes(sites, chosen):
     iy, ix = np.nonzero(chosen)
     x, y = sites.cx[ix], sites.cy[iy]
-    return np.stack([x, y, x + sites.size, y + sites.size], axis=1)
+    return np.stack([x, y, x + sites.size, y + sites.size], axis=1).astype(float)
 
 
 # ------------------------------------------------------------------------------ rules
@@ -123,7 +150,7 @@ def test_fill_never_violates_the_keepout(chip):
     path, w, s = chip
     chosen = select_fill(s, s.capacity)
     assert chosen.sum() == s.free.sum() > 500
-    fill = fill_polygons(s, chosen, 36, 28)
+    fill = rectangles(fill_polygons(s, chosen))
     drawn = drawn_polygons(path)
     for join in ("miter", "round"):
         grown = gdstk.offset(drawn, RULES.keepout / 1e-9 - 1.0, join=join, use_union=True)
@@ -181,9 +208,9 @@ def test_filled_windows_equal_reextraction(chip, tmp_path):
     chosen = select_fill(s, counts)
     np.testing.assert_array_equal(chosen.reshape(s.shape[0], s.per_window, s.shape[1], s.per_window).sum(axis=(1, 3)), counts)
     after = filled_windows(w, s, chosen)
-    lib = read_layout(path).library
+    lib = gdstk.read_gds(str(path), unit=1e-9)
     top = next(c for c in lib.cells if c.name == "TOP")
-    top.add(*fill_polygons(s, chosen, 68, 20))
+    top.add(*rectangles(fill_polygons(s, chosen), 68, 20))
     merged = tmp_path / "merged.gds"
     lib.write_gds(str(merged))
     ref = extract_windows(merged, ["68/20"], 20 * UM, origin=w.origin)
@@ -200,12 +227,11 @@ def test_write_fill_round_trip(chip, tmp_path, suffix):
     chosen = select_fill(s, counts)
     out = write_fill(tmp_path / f"fill{suffix}", s, chosen, "36/28")
     lay = read_layout(out)
-    cell = top_cell(lay)
-    polys = cell.get_polygons()
-    assert len(polys) == chosen.sum() == counts.sum()
-    assert {(p.layer, p.datatype) for p in polys} == {(36, 28)}
-    got = np.array(sorted(tuple(np.round(p.bounding_box()).ravel()) for p in polys))
-    want = np.array(sorted(map(tuple, square_boxes(s, chosen))))
+    shapes = klayout_boxes(out)
+    assert len(shapes) == chosen.sum() == counts.sum()
+    assert {pair for pair, _, _ in shapes} == {(36, 28)} and all(is_box for _, _, is_box in shapes)
+    got = np.array(sorted(b for _, b, _ in shapes))
+    want = np.array(sorted(map(tuple, square_boxes(s, chosen).astype(int).tolist())))
     np.testing.assert_array_equal(got, want)
     assert lay.dbu == pytest.approx(1e-9)
     assert not list(tmp_path.glob("*.tmp*"))
@@ -230,8 +256,8 @@ def test_bad_inputs(chip, tmp_path):
 
 
 def test_sites_use_the_hierarchy(tmp_path):
-    """A stepped block is flattened once and visited per placement; the sites equal those of the
-    same chip written flat."""
+    """A stepped block (an array and a rotated placement): the sites equal those of the same chip
+    written flat, and the block's keep-out is computed once in its own cell (not per placement)."""
     lib = gdstk.Library(unit=1e-9, precision=1e-9)
     blk = lib.new_cell("BLK")
     blk.add(gdstk.Reference(lib.new_cell("L").add(gdstk.rectangle((0, 0), (1 * NM, 50 * NM), layer=68, datatype=20)),
@@ -248,10 +274,11 @@ def test_sites_use_the_hierarchy(tmp_path):
     flat = tmp_path / "flat.gds"
     flat_lib.write_gds(str(flat))
     w = extract_windows(hier, ["68/20"], 25 * UM)
-    a = fill_sites(hier, ["68/20"], w, RULES, flat_limit=50)
+    a = fill_sites(hier, ["68/20"], w, RULES)
     b = fill_sites(flat, ["68/20"], w, RULES)
     np.testing.assert_array_equal(a.free, b.free)
-    assert a.stats["placements"] == 13 and a.stats["cells_flattened"] == 2
+    assert 0 < a.free.sum() < a.free.size
+    assert a.stats["cells"] <= 3 and b.stats["cells"] == 1
 
 
 # ------------------------------------------------------------------------------ the model
@@ -381,13 +408,13 @@ def test_cli_fill_reports_before_and_after_with_the_die_commands_definitions(fil
 def test_cli_fill_file_reads_back_and_keeps_out_of_the_drawn_shapes(fill_run):
     path, out, d = fill_run
     assert {p.name for p in out.iterdir()} == {"die.json", "die.nc", "die.png", "hotspots.lyrdb", "hotspots.csv", "fill.gds"}
-    lib = gdstk.read_gds(str(out / "fill.gds"))
+    lib = gdstk.read_gds(str(out / "fill.gds"), unit=1e-9)  # KLayout writes um user units: read in nm
     top = next(c for c in lib.top_level())
     fill = top.get_polygons()
     assert len(fill) == d["fill"]["squares"] > 0
     assert {(p.layer, p.datatype) for p in fill} == {(36, 28)}
     assert sum(p.area() for p in fill) * 1e-18 == pytest.approx(d["fill"]["added_area"], rel=1e-9)
-    drawn = top_cell(read_layout(path)).get_polygons(layer=68, datatype=20)
+    drawn = drawn_polygons(path)
     grown = gdstk.offset(drawn, 2 * NM - 1.0, join="miter", use_union=True)
     assert gdstk.boolean(fill, grown, "and") == []
     assert gdstk.boolean(fill, drawn, "and") == []
@@ -399,18 +426,16 @@ def test_cli_fill_oasis_in_oasis_out(tmp_path):
     assert res.exit_code == 0, res.output
     assert json.loads(res.stdout)["fill"]["file"] == "fill.oas"
     assert (tmp_path / "out" / "fill.oas").is_file() and not (tmp_path / "out" / "fill.gds").exists()
-    polys = top_cell(read_layout(tmp_path / "out" / "fill.oas")).get_polygons()
-    assert len(polys) == json.loads(res.stdout)["fill"]["squares"]
+    shapes = klayout_boxes(tmp_path / "out" / "fill.oas")
+    assert len(shapes) == json.loads(res.stdout)["fill"]["squares"] and {pair for pair, _, _ in shapes} == {(36, 28)}
 
 
 def test_cli_fill_defaults_from_the_pdk():
-    from cmpsim.cli.die import _fill_setup
-
-    rules, pair = _fill_setup(["met1"], "sky130", None, None, None, None, None, None)
+    rules, pair = resolve_fill(["met1"], "sky130")
     assert pair == (36, 28) and rules == FILL_RULES["sky130"]["met1"]
-    rules, pair = _fill_setup(["68/20"], "sky130", None, None, None, None, "4um", None)  # the drawn pair names met1
+    rules, pair = resolve_fill(["68/20"], "sky130", keepout=4 * UM)  # the drawn pair names met1
     assert pair == (36, 28) and rules.keepout == pytest.approx(4 * UM) and "overrides" in rules.source
-    rules, pair = _fill_setup(["metal2"], "gf180mcu", None, "36/9", None, None, None, None)
+    rules, pair = resolve_fill(["metal2"], "gf180mcu", None, "36/9")
     assert pair == (36, 9) and rules == FILL_RULES["gf180mcu"]["metal2"]
 
 
@@ -436,3 +461,135 @@ def test_cli_fill_bad_input_exits_2_naming_the_option_and_writes_nothing(tmp_pat
         assert res.exit_code == 2, (args, res.output)
         assert text in res.output, (args, res.output)
         assert not out.exists(), args
+
+
+# ------------------------------------------------------------------------------ independent checks (KLayout)
+def hierarchical_chip(path):
+    """A 300 x 300 um chip of one small block placed many ways: arrays, 90-degree rotations, a mirror,
+    a 30-degree rotation, a magnification, placements overlapping each other; the leaf has a
+    Manhattan bar and a 45-degree triangle, and its placements in a row overlap."""
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    leaf = lib.new_cell("LEAF")
+    leaf.add(gdstk.rectangle((0, 0), (4 * NM, 1 * NM), layer=68, datatype=20))
+    leaf.add(gdstk.Polygon([(0, 2 * NM), (2 * NM, 2 * NM), (0, 4 * NM)], layer=68, datatype=20))
+    row = lib.new_cell("ROW")
+    row.add(gdstk.Reference(leaf, (0, 0), columns=6, rows=1, spacing=(3 * NM, 0)))  # overlapping leaves
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (300 * NM, 300 * NM), layer=235, datatype=4))
+    top.add(gdstk.Reference(row, (10 * NM, 10 * NM), columns=3, rows=4, spacing=(37 * NM, 23 * NM)))
+    top.add(gdstk.Reference(row, (11 * NM, 10.5 * NM)))  # on top of an array element
+    top.add(gdstk.Reference(row, (250 * NM, 20 * NM), rotation=math.pi / 2))
+    top.add(gdstk.Reference(row, (250 * NM, 120 * NM), rotation=math.pi, x_reflection=True))
+    top.add(gdstk.Reference(row, (150 * NM, 150 * NM), rotation=math.pi / 6))
+    top.add(gdstk.Reference(row, (60 * NM, 220 * NM), magnification=1.5, rotation=-math.pi / 2))
+    top.add(gdstk.rectangle((200 * NM, 200 * NM), (230 * NM, 260 * NM), layer=68, datatype=20))
+    lib.write_gds(str(path))
+    return path
+
+
+def test_fill_keeps_out_by_klayouts_own_checks(tmp_path):
+    """Every free site filled on a hierarchical chip, the fill file written and read back into the
+    layout by KLayout: KLayout's separation check (Euclidean) finds no square closer than the
+    keep-out to a drawn shape, none closer than the spacing to another, and the drawn shapes grown
+    by the box [-(keep-out - 1 nm), keep-out - 1 nm]^2 (their Minkowski sum) meet no square."""
+    path = hierarchical_chip(tmp_path / "hier.gds")
+    w = extract_windows(path, ["68/20"], 25 * UM)
+    s = fill_sites(path, ["68/20"], w, RULES)
+    chosen = select_fill(s, s.capacity)
+    out = write_fill(tmp_path / "fill.gds", s, chosen, "36/28")
+    ly = kdb.Layout()
+    ly.read(str(path))
+    ly.read(str(out))  # the fill merged into the layout: its cell becomes a second top cell
+    drawn = kdb.Region(ly.cell("TOP").begin_shapes_rec(ly.find_layer(68, 20)))
+    fill = kdb.Region(ly.cell("CMPSIM_FILL").begin_shapes_rec(ly.find_layer(36, 28)))
+    assert fill.count() == chosen.sum() > 5000
+    k = round(RULES.keepout / 1e-9)
+    assert drawn.separation_check(fill, k).is_empty()
+    assert fill.space_check(round(RULES.spacing / 1e-9)).is_empty()
+    assert (fill & drawn.minkowski_sum(kdb.Box(1 - k, 1 - k, k - 1, k - 1))).is_empty()  # Chebyshev distance too
+    # the keep-out is not padded on Manhattan shapes: some square sits within 1 um more of the drawn rectangle
+    assert not drawn.separation_check(fill, k + 1000).is_empty()
+    # and the same chip flattened gives the same sites
+    flat_lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    flat_lib.new_cell("TOP").add(*next(c for c in gdstk.read_gds(str(path), unit=1e-9).cells if c.name == "TOP").get_polygons())
+    flat_lib.write_gds(str(tmp_path / "flat.gds"))
+    np.testing.assert_array_equal(fill_sites(tmp_path / "flat.gds", ["68/20"], w, RULES).free, s.free)
+
+
+def test_a_square_exactly_at_the_keepout_from_two_shapes_is_free(tmp_path):
+    """Two bars exactly 2 keepout + size apart: the site between them, at exactly the keep-out from
+    both, is free, its neighbours are not (an odd square side in dbu, where half a square is not
+    a whole dbu)."""
+    rules = FillRules(2.001 * UM, 1.499 * UM, 2.5 * UM)
+    x = 749 + 2 * 3500  # the third lattice column of window 0
+    for left, right, free in ((0, 0, True), (1, 0, False), (0, -1, False)):  # then 1 nm closer on either side
+        lib = gdstk.Library(unit=1e-9, precision=1e-9)
+        top = lib.new_cell("TOP")
+        top.add(gdstk.rectangle((0, 0), (40 * NM, 40 * NM), layer=235, datatype=4))
+        top.add(gdstk.rectangle((0, 0), (x - 2500 + left, 40 * NM), layer=68, datatype=20))
+        top.add(gdstk.rectangle((x + 2001 + 2500 + right, 0), (40 * NM, 40 * NM), layer=68, datatype=20))
+        path = tmp_path / f"gap{left}{right}.gds"
+        lib.write_gds(str(path))
+        w = extract_windows(path, ["68/20"], 20 * UM)
+        s = fill_sites(path, ["68/20"], w, rules)
+        col = int(np.nonzero(s.cx == x)[0][0])
+        assert s.free.sum() == (s.free.shape[0] if free else 0)
+        assert s.free[:, col].all() == free
+
+
+def test_fill_file_places_patterns_as_arrays(chip, tmp_path):
+    """Windows with the same pattern share one cell, placed as arrays along x: fewer instances than windows."""
+    _, w, s = chip
+    chosen = select_fill(s, np.minimum(s.capacity, 3))
+    out = write_fill(tmp_path / "fill.oas", s, chosen, (36, 28))
+    ly = kdb.Layout()
+    ly.read(str(out))
+    topc = ly.cell("CMPSIM_FILL")
+    filled = int((chosen.reshape(s.shape[0], s.per_window, s.shape[1], s.per_window).sum(axis=(1, 3)) > 0).sum())
+    assert topc.child_instances() < filled
+    assert sum(1 for _ in topc.each_inst() if _.is_regular_array()) > 0
+    assert ly.dbu == pytest.approx(1e-3)
+    assert len(klayout_boxes(out)) == chosen.sum()
+
+
+def test_a_lattice_too_large_for_the_machine_is_refused_naming_the_options(chip, monkeypatch):
+    import cmpsim.layout.fill as layout_fill
+    from cmpsim.layout import LayoutTooLarge
+
+    path, w, s = chip
+    monkeypatch.setattr(layout_fill, "MAX_SITES", s.free.size - 1)
+    with pytest.raises(LayoutTooLarge, match="--fill-size"):
+        fill_sites(path, ["68/20"], w, RULES)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_oblique_shapes_and_placements_keep_out(tmp_path, seed):
+    """Random triangles and quadrilaterals at any angle, placed at any rotation, mirrored, magnified,
+    overlapping: every free site filled keeps the keep-out by KLayout's separation check (Euclidean)
+    and its box distance (Minkowski sum), and odd rules in dbu change nothing."""
+    rng = np.random.default_rng(seed)
+    rules = FillRules(1.001 * UM, 0.999 * UM, 1.237 * UM)
+    lib = gdstk.Library(unit=1e-9, precision=1e-9)
+    cell = lib.new_cell("C")
+    for _ in range(6):
+        pts = rng.uniform(0, 12 * NM, size=(int(rng.integers(3, 5)), 2)).round()
+        cell.add(gdstk.Polygon(pts, layer=68, datatype=20))
+    top = lib.new_cell("TOP")
+    top.add(gdstk.rectangle((0, 0), (150 * NM, 150 * NM), layer=235, datatype=4))
+    for _ in range(8):
+        top.add(gdstk.Reference(cell, tuple(rng.uniform(10 * NM, 130 * NM, 2).round()), rotation=float(rng.uniform(0, 2 * math.pi)),
+                                magnification=float(rng.choice([1.0, 1.0, 1.7])), x_reflection=bool(rng.integers(2))))
+    path = tmp_path / "random.gds"
+    lib.write_gds(str(path))
+    w = extract_windows(path, ["68/20"], 15 * UM)
+    s = fill_sites(path, ["68/20"], w, rules)
+    out = write_fill(tmp_path / "fill.gds", s, select_fill(s, s.capacity), "36/28")
+    ly = kdb.Layout()
+    ly.read(str(path))
+    ly.read(str(out))
+    drawn = kdb.Region(ly.cell("TOP").begin_shapes_rec(ly.find_layer(68, 20)))
+    fill = kdb.Region(ly.cell("CMPSIM_FILL").begin_shapes_rec(ly.find_layer(36, 28)))
+    k = 1237
+    assert fill.count() > 500
+    assert drawn.separation_check(fill, k).is_empty()
+    assert (fill & drawn.minkowski_sum(kdb.Box(1 - k, 1 - k, k - 1, k - 1))).is_empty()

@@ -208,3 +208,12 @@ def test_cmpsim_run_loads_only_the_libraries_it_runs():
     assert "cmpsim.solver.equilibrium" in loaded and "scipy.sparse.linalg" in loaded  # it did solve
     heavy = {"scipy.stats", "scipy.optimize", "scipy.interpolate", "xarray", "matplotlib", "dask", "distributed", "pandas", "pint"}
     assert not heavy & loaded, sorted(heavy & loaded)
+
+
+def test_the_recipe_engine_and_the_riding_die_do_not_need_each_other():
+    """polisher.engine drives polisher.ride; ride imported engine's cache key and units inside
+    functions (issue 37). The key is the config's own (Config.key) and the engine merges the ride's
+    units, so no circle is left among the polisher's modules, not even inside a function."""
+    cycles = import_cycles(SRC, top_level_only=False)
+    assert not [c for c in cycles if any(m.startswith("cmpsim.polisher.") for m in c)], cycles
+    assert not {i for i in imports_of(SRC / "polisher" / "ride.py", "cmpsim.polisher.ride") if i.startswith("cmpsim.polisher.engine")}

@@ -3,7 +3,7 @@ with it, and the EWMA controller holds the final thickness where an uncontrolled
 
 The 300mm preset (grooved) on the coarse grid, 25 wafers of the issue's oxide recipe, seed 1, one
 monitor wafer before each lot (the default qualification): three lots computed once for the module
-(about 15-20 s each on 2 cores). The fresh-pad lot (qualification = 0) is in tests/test_pad_in_recipe.py."""
+(about 15-30 s each on 2 cores). The fresh-pad lot (qualification = 0) is in tests/test_pad_in_recipe.py."""
 
 import json
 from importlib import resources
@@ -72,20 +72,24 @@ def test_with_ewma_control_the_final_thickness_stays_within_1_percent_of_target_
 
 
 @pytest.mark.slow
-def test_the_ewma_error_decays_wafer_after_wafer(lots):
-    """The controlled lot's deviation from the target shrinks wafer after wafer while the rate error
-    dominates (the monitor wafer's rate and the lot's differ by the zone feedback's changes; measured
-    0.94, 0.79, 0.59, 0.39, 0.27 % on wafers 1-5)."""
+def test_the_double_ewma_is_on_target_from_the_first_wafer(lots):
+    """Issue 38's double EWMA, seeded by the monitor wafer's rate and the pad-life model's drift
+    (docs/polisher.md, eqs. C2-C5): measured within 0.012 % on every wafer (issue 32's single EWMA
+    needed four wafers: 0.94, 0.79, 0.59, 0.39 %)."""
     lot = lots[("in_situ", "ewma")]
     deviation = np.abs(_finals(lot) / lot.target - 1.0)
-    assert np.all(np.diff(deviation[:6]) < 0), deviation[:6]
+    assert np.max(deviation) <= 1e-3, deviation
 
 
 @pytest.mark.slow
-def test_the_controller_moves_the_zone_pressures_and_keeps_the_load(lots):
+def test_the_controller_moves_the_zone_pressures_only_on_steps_it_predicts_help(lots):
+    """The zone feedback moved the zones (issue 38: it no longer keeps the load, the time takes the
+    mean rate's change), and every wafer records its decision and the non-uniformity it predicted."""
     lot = lots[("in_situ", "ewma")]
     zones = np.array([w.zone_pressures for w in lot.wafers])
     assert np.ptp(zones, axis=0).max() > 0.05 * zones[0].mean()  # it moved them
+    assert all(w.zone_step in ("accepted", "refused") or w.zone_step.startswith("halved") for w in lot.wafers)
+    assert all(0 < w.predicted_nonuniformity < 0.02 for w in lot.wafers)
     uncontrolled = np.array([w.zone_pressures for w in lots[("in_situ", "none")].wafers])
     assert np.ptp(uncontrolled) == 0.0  # without control they stay the preset's
 
@@ -106,7 +110,7 @@ def test_a_lot_is_reproducible_with_its_seed_and_the_json_keeps_the_contract(tmp
     out = tmp_path / "out"
     done = CliRunner().invoke(main, ["lot", str(path), "--wafers", "1", "--set", "grid=coarse", "--out", str(out)])
     assert done.exit_code == 0, done.output
-    assert {p.name for p in out.iterdir()} == {"lot.json", "lot.csv", "lot.png"}
+    assert {p.name for p in out.iterdir()} == {"lot.json", "lot.csv", "lot.png", "lot.checkpoint.json"}
 
 
 def test_bad_lots_are_refused_with_the_option_named(tmp_path):

@@ -7,7 +7,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows"]
 
 
 @contextlib.contextmanager
@@ -51,3 +51,23 @@ def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str
         raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc}") from None
     except OSError as exc:
         raise error(f"cannot read {what} {str(path)!r}: {exc}") from None
+
+
+def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]:
+    """A data file's ``# key: value`` comment lines (keys lower case, a repeated key's values joined)
+    and its other non-blank lines with their line numbers (1-based): the header first."""
+    meta: dict[str, str] = {}
+    body: list[tuple[int, str]] = []
+    for i, line in enumerate(text.splitlines(), start=1):
+        s = line.strip()
+        if s.startswith("#"):
+            content = s.lstrip("#").strip()
+            if ":" in content:
+                k, v = content.split(":", 1)
+                k = k.strip().lower()
+                if k and " " not in k:
+                    meta[k] = (meta[k] + " " + v.strip()) if k in meta else v.strip()
+            continue
+        if s:
+            body.append((i, line))
+    return meta, body

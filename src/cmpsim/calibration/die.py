@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .measurements import StructureRecord
+from .scalefit import ScaleFit, log_intervals
 
 __all__ = ["DIE_CONSTANTS", "ISOLATED_PITCH", "TestStructure", "DieCalibration", "predict_die", "calibrate_die",
            "choose_free", "heldout_comparison", "start_jacobian", "start_values"]
@@ -309,55 +310,18 @@ def start_jacobian(records, names, config=None, step: float = 1e-3, values: dict
 
 
 @dataclass
-class DieCalibration:
-    """The die constants fitted to test structures (SI), their uncertainty and the residuals.
+class DieCalibration(ScaleFit):
+    """The die constants fitted to test structures (SI), their uncertainty and the residuals (m).
 
-    ``values``/``start``: fitted and starting constants; ``ci95``: 95 % intervals; ``stderr``:
-    standard errors (delta method); ``correlation``: of the fitted variables ln(value);
-    ``covariance``: covariance of ln(value) (what :class:`cmpsim.die.uncertainty.DieUncertainty`
-    propagates); ``residuals_before``/``after``: model - measured (m) per record;
-    ``identifiability``: what the data can and cannot separate; ``constants``: everything to
+    As :class:`cmpsim.calibration.scalefit.ScaleFit`; ``covariance`` is what
+    :class:`cmpsim.die.uncertainty.DieUncertainty` propagates; ``constants``: everything to
     write into a process file (the fitted values, with the die defaults they replace).
     """
 
-    free: list[str]
-    values: dict[str, float]
-    start: dict[str, float]
-    stderr: dict[str, float]
-    ci95: dict[str, tuple[float, float]]
-    correlation: np.ndarray
-    covariance: np.ndarray
-    records: list = field(repr=False)
-    measured: np.ndarray = field(repr=False)
-    model_before: np.ndarray = field(repr=False)
-    model_after: np.ndarray = field(repr=False)
-    chi2: float = float("nan")
-    dof: int = 0
-    absolute_sigma: bool = False
-    reasons: dict = field(default_factory=dict)
-    identifiability: list = field(default_factory=list)
     fixed: dict = field(default_factory=dict)
     config: object = field(default=None, repr=False)
     success: bool = True
     nfev: int = 0
-
-    @property
-    def residuals_before(self) -> np.ndarray:
-        return self.model_before - self.measured
-
-    @property
-    def residuals_after(self) -> np.ndarray:
-        return self.model_after - self.measured
-
-    @property
-    def rms_before(self) -> float:
-        """RMS of model - measured before the fit, m."""
-        return float(np.sqrt(np.nanmean(self.residuals_before**2)))
-
-    @property
-    def rms_after(self) -> float:
-        """RMS of model - measured after the fit, m."""
-        return float(np.sqrt(np.nanmean(self.residuals_after**2)))
 
     @property
     def constants(self) -> dict:
@@ -520,16 +484,8 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
     dof = len(records) - len(free)
     notes: list[str] = []
     cov = _covariance(J, chi2, dof, absolute, notes)
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) if np.all(np.isfinite(cov)) else np.full(len(free), np.inf)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se, se) if np.all(np.isfinite(se)) and np.all(se > 0) else np.full(cov.shape, np.nan)
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
-    ci = {}
-    stderr = {}
-    for k, n in enumerate(free):
-        w = 1.96 * se[k]
-        ci[n] = (vals[n] * math.exp(-w), vals[n] * math.exp(w)) if np.isfinite(w) and w < 700 else (0.0, math.inf)
-        stderr[n] = vals[n] * se[k]
+    se, corr, ci, stderr = log_intervals(cov, free, vals)
     notes += _identifiability(free, J, se, corr, vals, lo, hi)
     if auto:
         held = [n for n in DIE_CONSTANTS if n not in free and n not in fixed and n not in {k for r in records for k in r.inputs}]

@@ -75,19 +75,9 @@ def _length(rec: dict, column: str, unit: str, where: str) -> float:
 def read_lot_rows(path, text: str) -> list[LotRecord]:
     """The lot rows of ``text`` (the CSV content of the file ``path``; its comment lines give the ``dataset``), SI."""
     path = Path(path)
-    meta: dict[str, str] = {}
-    body: list[tuple[int, str]] = []
-    for i, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if s.startswith("#"):
-            content = s.lstrip("#").strip()
-            if ":" in content:
-                k, v = content.split(":", 1)
-                if k.strip() and " " not in k.strip():
-                    meta[k.strip().lower()] = v.strip()
-            continue
-        if s:
-            body.append((i, line))
+    from ..io import comments_and_rows
+
+    meta, body = comments_and_rows(text)
     if not body:
         raise LotDataError(f"{path}: no header row and no data rows")
     header = [h.strip() for h in next(csv.reader([body[0][1]]))]

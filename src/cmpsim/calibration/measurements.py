@@ -59,8 +59,23 @@ class MeasurementError(ValueError):
     """A measurement file that cannot be used; the message names the file, the row (line) and the column."""
 
 
+@dataclass(frozen=True, kw_only=True)
+class _Provenance:
+    """Where a record comes from: its data set, file line, source, label and file."""
+
+    dataset: str = ""
+    line: int = 0
+    source: str = ""
+    label: str = ""
+    path: str = ""
+
+    @property
+    def where(self) -> str:
+        return f"{self.path}:{self.line}" if self.path else f"row {self.line}"
+
+
 @dataclass(frozen=True)
-class StructureRecord:
+class StructureRecord(_Provenance):
     """One measured test structure (SI): the quantity, its value and standard uncertainty (m), the structure and the step."""
 
     quantity: str
@@ -73,15 +88,6 @@ class StructureRecord:
     time: float | None = None  # None: at the structure's end point
     blanket_rate: float | None = None  # m/s
     inputs: dict = field(default_factory=dict)  # die inputs of the point (SI), e.g. copper_thickness
-    dataset: str = ""
-    line: int = 0
-    source: str = ""
-    label: str = ""
-    path: str = ""
-
-    @property
-    def where(self) -> str:
-        return f"{self.path}:{self.line}" if self.path else f"row {self.line}"
 
     @property
     def density(self) -> float:
@@ -90,7 +96,7 @@ class StructureRecord:
 
 
 @dataclass(frozen=True)
-class ThermalRecord:
+class ThermalRecord(_Provenance):
     """One measured pad quantity (SI) at ``time`` (s) under ``conditions`` (cmpsim parameter -> text with units)."""
 
     quantity: str
@@ -99,15 +105,6 @@ class ThermalRecord:
     time: float | None
     conditions: dict = field(default_factory=dict)
     slurry_flow_rate: float | None = None  # m^3/s
-    dataset: str = ""
-    line: int = 0
-    source: str = ""
-    label: str = ""
-    path: str = ""
-
-    @property
-    def where(self) -> str:
-        return f"{self.path}:{self.line}" if self.path else f"row {self.line}"
 
 
 def shipped_measurement_paths(kind: str = "die") -> list[Path]:
@@ -164,20 +161,9 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    meta: dict[str, str] = {}
-    body: list[tuple[int, str]] = []
-    for i, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if s.startswith("#"):
-            content = s.lstrip("#").strip()
-            if ":" in content:
-                k, v = content.split(":", 1)
-                k = k.strip().lower()
-                if k and " " not in k:
-                    meta[k] = (meta[k] + " " + v.strip()) if k in meta else v.strip()
-            continue
-        if s:
-            body.append((i, line))
+    from ..io import comments_and_rows
+
+    meta, body = comments_and_rows(text)
     if not body:
         raise MeasurementError(f"{path}: no header row and no data rows (format: cmpsim/data/README.md, docs/calibrate-die.md)")
     hline, htext = body[0]

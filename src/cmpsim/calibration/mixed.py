@@ -105,8 +105,10 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
     families = sorted(set(fam_of_line.values()))
     reader = {"film": "film", "structure": "measurement", "pad": "measurement", "lot": "lot"}
     groups = sorted({reader[f] for f in families})
-    if len(groups) == 1 and all(_accepts(families[0], c) for c in header):
-        return {groups[0]: (text, rows)}  # one family, every column its own: the reader sees the file as it is
+    if not groups:
+        return {"film": (text, rows)}  # no data row: the data-set reader says so ("no data rows")
+    if len(groups) == 1:
+        return {groups[0]: (text, rows)}  # one reader: it sees the file as it is and names a column it does not know
     out = {}
     for g in groups:
         fams = [f for f in families if reader[f] == g]

@@ -25,6 +25,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .scalefit import ScaleFit, log_intervals
+
 __all__ = ["GLAZING_CONSTANTS", "LotSetting", "PadLifeCalibration", "default_constants", "check_constants", "predict_lot",
            "choose_free", "start_jacobian", "calibrate_padlife", "padlife_constants"]
 
@@ -135,25 +137,11 @@ def start_jacobian(records, names, setting: LotSetting, values: dict | None = No
 
 
 @dataclass
-class PadLifeCalibration:
-    """Fitted pad life constants (SI) with 95 % intervals, correlations, residuals before and after, and identifiability."""
+class PadLifeCalibration(ScaleFit):
+    """Fitted pad life constants (SI) with 95 % intervals, correlations, residuals before and after, and identifiability
+    (:class:`cmpsim.calibration.scalefit.ScaleFit`); ``left``: the constants the lot could not separate, and why;
+    ``setting``: how the lot ran."""
 
-    free: list[str]
-    values: dict[str, float]
-    start: dict[str, float]
-    ci95: dict[str, tuple[float, float]]
-    stderr: dict[str, float]
-    correlation: np.ndarray
-    covariance: np.ndarray
-    records: list = field(repr=False)
-    measured: np.ndarray = field(repr=False)
-    model_before: np.ndarray = field(repr=False)
-    model_after: np.ndarray = field(repr=False)
-    chi2: float = float("nan")
-    dof: int = 0
-    absolute_sigma: bool = False
-    reasons: dict = field(default_factory=dict)
-    identifiability: list = field(default_factory=list)
     left: list = field(default_factory=list)
     setting: object = field(default=None, repr=False)
 
@@ -161,14 +149,6 @@ class PadLifeCalibration:
     def constants(self) -> dict:
         """Every pad life constant the lot runs with (SI): the fitted ones, the others at their defaults."""
         return {**default_constants(), **self.values}
-
-    @property
-    def residuals_before(self) -> np.ndarray:
-        return self.model_before - self.measured
-
-    @property
-    def residuals_after(self) -> np.ndarray:
-        return self.model_after - self.measured
 
     def table(self) -> dict:
         """The ``[calibration.padlife]`` extras: the lot's setting (what a held-out lot must share)."""
@@ -289,18 +269,14 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
     dof = len(records) - len(free)
     notes: list[str] = list(chosen_again)
     cov = _covariance(J, chi2, dof, absolute, notes)
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) if np.all(np.isfinite(cov)) else np.full(len(free), np.inf)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se, se) if np.all(np.isfinite(se)) and np.all(se > 0) else np.full(cov.shape, np.nan)
     vals = values_of(z)
-    ci = {n: (vals[n] * math.exp(-1.96 * se[k]), vals[n] * math.exp(1.96 * se[k])) if np.isfinite(se[k]) else (0.0, math.inf)
-          for k, n in enumerate(free)}
-    stderr = {n: vals[n] * se[k] for k, n in enumerate(free)}
+    se, corr, ci, stderr = log_intervals(cov, free, vals)
     # relative to the start (the constants are of order 1e-15 1/Pa: an absolute tolerance would call every value a bound)
     notes += _identifiability(free, J, se, corr, {n: vals[n] / x0[k] for k, n in enumerate(free)}, lo / x0, hi / x0)
     m1 = predict_lot(records, {**s0, **vals}, setting)
-    return PadLifeCalibration(list(free), vals, {n: float(s0[n]) for n in free}, ci, stderr, corr, cov, records, y, m0, m1, chi2, dof,
-                              absolute, reasons, notes, left, setting)
+    return PadLifeCalibration(free=list(free), values=vals, start={n: float(s0[n]) for n in free}, stderr=stderr, ci95=ci, correlation=corr,
+                              covariance=cov, records=records, measured=y, model_before=m0, model_after=m1, chi2=chi2, dof=dof,
+                              absolute_sigma=absolute, reasons=reasons, identifiability=notes, left=left, setting=setting)
 
 
 def values_from(z, free, x0) -> dict:

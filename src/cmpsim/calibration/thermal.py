@@ -32,6 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .measurements import ThermalRecord
+from .scalefit import ScaleFit, log_intervals
 
 __all__ = ["THERMAL_CONSTANTS", "FrictionalPower", "frictional_power", "predict_thermal", "calibrate_thermal", "ThermalCalibration",
            "step_rise", "choose_free", "start_values", "start_jacobian"]
@@ -135,39 +136,16 @@ def predict_thermal(records, constants: dict | None = None, config=None) -> np.n
 
 
 @dataclass
-class ThermalCalibration:
-    """Fitted pad constants (SI) with 95 % intervals, correlations, residuals before/after and what the data cannot separate."""
+class ThermalCalibration(ScaleFit):
+    """Fitted pad constants (SI) with 95 % intervals, correlations, residuals before/after and what the data cannot
+    separate (:class:`cmpsim.calibration.scalefit.ScaleFit`)."""
 
-    free: list[str]
-    values: dict[str, float]
-    start: dict[str, float]
-    ci95: dict[str, tuple[float, float]]
-    stderr: dict[str, float]
-    correlation: np.ndarray
-    covariance: np.ndarray
-    records: list = field(repr=False)
-    measured: np.ndarray = field(repr=False)
-    model_before: np.ndarray = field(repr=False)
-    model_after: np.ndarray = field(repr=False)
-    chi2: float = float("nan")
-    dof: int = 0
-    absolute_sigma: bool = False
-    reasons: dict = field(default_factory=dict)
-    identifiability: list = field(default_factory=list)
     config: object = field(default=None, repr=False)
 
     @property
     def constants(self) -> dict:
         """The constants to write into the process file (SI): ``friction_coefficient``, ``pad_heat_transfer_coefficient``."""
         return dict(self.values)
-
-    @property
-    def residuals_before(self) -> np.ndarray:
-        return self.model_before - self.measured
-
-    @property
-    def residuals_after(self) -> np.ndarray:
-        return self.model_after - self.measured
 
     def predict(self, records) -> np.ndarray:
         return predict_thermal(records, self.values, self.config)
@@ -298,14 +276,9 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
     dof = len(records) - len(free)
     notes: list[str] = []
     cov = _covariance(J, chi2, dof, absolute, notes)
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) if np.all(np.isfinite(cov)) else np.full(len(free), np.inf)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        corr = cov / np.outer(se, se) if np.all(np.isfinite(se)) and np.all(se > 0) else np.full(cov.shape, np.nan)
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
-    ci = {n: (vals[n] * math.exp(-1.96 * se[k]), vals[n] * math.exp(1.96 * se[k])) if np.isfinite(se[k]) else (0.0, math.inf)
-          for k, n in enumerate(free)}
-    stderr = {n: vals[n] * se[k] for k, n in enumerate(free)}
+    se, corr, ci, stderr = log_intervals(cov, free, vals)
     notes += _identifiability(free, J, se, corr, vals, lo, hi)
     m1 = predict_thermal(records, {**s0, **vals}, base)
-    return ThermalCalibration(list(free), vals, {n: float(s0[n]) for n in free}, ci, stderr, corr, cov, records, y, m0, m1, chi2, dof,
+    return ThermalCalibration(list(free), vals, {n: float(s0[n]) for n in free}, stderr, ci, corr, cov, records, y, m0, m1, chi2, dof,
                               absolute, reasons, notes, base)

@@ -111,10 +111,19 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
             if not layers:
                 raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml")
             if fill:
-                rules, fill_pair = _fill_setup(list(layers), pdk, layer_map, fill_layer, fill_size, fill_spacing, fill_keepout, fill_edge)
+                from ..die.fill import fill_die
+                from ..layout.fill import resolve_fill
+
+                lengths = {k: to_si(v, "m", opt, "2 um") if v else None
+                           for k, v, opt in (("size", fill_size, "--fill-size"), ("spacing", fill_spacing, "--fill-spacing"),
+                                             ("keepout", fill_keepout, "--fill-keepout"), ("edge", fill_edge, "--fill-edge"))}
+                rules, fill_pair = resolve_fill(list(layers), pdk, layer_map, fill_layer, **lengths)
                 rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
-                result, plan, fill_file = _fill_run(layout, list(layers), window if window is not None else 20e-6, top, pdk, layer_map,
-                                                    rules, fill_pair, cfg, rate, t, kwargs, out_dir)
+                options = {k: v for k, v in kwargs.items() if k not in ("cell_size", "process")}
+                with extraction_bar() as told:
+                    result, plan, fill_file = fill_die(layout, list(layers), window if window is not None else 20e-6, rules, fill_pair,
+                                                       top=top, pdk=pdk, layer_map=layer_map, config=cfg, process=process,
+                                                       blanket_rate=rate, time=t, with_file=bool(out_dir), progress=told, **options)
             else:
                 with extraction_bar() as told:
                     layout = layout_die(layout, list(layers), window if window is not None else 20e-6, top=top, pdk=pdk,
@@ -237,78 +246,3 @@ def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> d
         _warn("--wafer: the calibrated die constants apply; their intervals do not (a wafer of dies does not carry the covariance yet)")
     return apply_die_constants(kwargs, dc, given=tuple(parse_assignments(params)), with_uncertainty=not wafer)
 
-
-def _fill_setup(layers, pdk, layer_map, fill_layer, size_text, spacing_text, keepout_text, edge_text):
-    """The fill rules and the fill's (layer, datatype) of ``--fill``: the PDK's where ``--pdk`` names the layer, overridable;
-    without it ``--fill-layer`` and the rules are required. ValueError naming the option."""
-    from ..inputs.units import to_si
-    from ..layout.fill import FILL_RULES, fill_rules
-    from ..layout.layermaps import PDK_LAYER_MAPS, parse_layer, resolve_layer
-
-    names = []  # the PDK layer names of the --layer values (by name, or by their drawn pair)
-    if pdk:
-        table = PDK_LAYER_MAPS[pdk]
-        for spec in layers:
-            key = str(spec).lower()
-            if key in table and parse_layer(spec) is None:
-                name = key
-            else:
-                pairs = resolve_layer(spec, pdk, layer_map)
-                name = next((n for n, mp in table.items() if mp[0] in pairs), None)
-            if name is not None and name not in names:
-                names.append(name)
-    one = names[0] if len(names) == 1 and len(layers) == 1 else None
-    where = (f"--pdk {pdk} names the --layer {one}" if one else
-             f"--pdk does not name one fill layer for --layer {', '.join(layers)}" if pdk else "without --pdk")
-    if fill_layer is None:
-        if one is None:
-            raise ValueError(f"--fill needs --fill-layer L/D (the fill's layer/datatype, e.g. 36/28): {where}")
-        pair = PDK_LAYER_MAPS[pdk][one][1]
-    else:
-        pair = parse_layer(fill_layer)
-        if pair is None:
-            raise ValueError(f"--fill-layer {fill_layer!r} must be L/D, a layer/datatype such as 36/28")
-    values = {k: to_si(v, "m", opt, "2 um") if v else None
-              for k, v, opt in (("size", size_text, "--fill-size"), ("spacing", spacing_text, "--fill-spacing"),
-                                ("keepout", keepout_text, "--fill-keepout"), ("edge", edge_text, "--fill-edge"))}
-    if one is None or one not in FILL_RULES.get(pdk, {}):
-        missing = [f"--fill-{k}" for k in ("size", "spacing", "keepout") if values[k] is None]
-        if missing:
-            raise ValueError(f"--fill needs the fill rules {', '.join(missing)} (e.g. --fill-size 2um --fill-spacing 1um "
-                             f"--fill-keepout 3um): {where}")
-    try:
-        rules = fill_rules(pdk, one, **values) if one is not None and one in FILL_RULES.get(pdk, {}) else fill_rules(None, **values)
-    except ValueError as exc:
-        raise ValueError(str(exc).replace("fill rule ", "--fill-")) from None
-    if not rules.keepout > 0:
-        raise ValueError(f"--fill-keepout must be a length > 0 (fill touching a drawn shape would merge with it); got {rules.keepout!r} m")
-    return rules, pair
-
-
-def _fill_run(path, layers, window, top, pdk, layer_map, rules, pair, cfg, rate, t, kwargs, out_dir):
-    """Extract the windows and the free fill sites, plan the fill with the die command's own :class:`DieModel` (its wafer
-    solve, weighting and --spec limits) and return (the filled die with its ``fill`` object, the plan, the fill file's name)."""
-    from dataclasses import replace
-
-    from ..die.chip import DieModel
-    from ..die.fill import plan_fill
-    from ..layout import extract_windows, read_layout
-    from ..layout.fill import fill_sites
-
-    try:
-        lay = read_layout(path)
-    except FileNotFoundError as exc:
-        raise ValueError(str(exc)) from None
-    windows = extract_windows(lay, layers, window, top=top, pdk=pdk, layer_map=layer_map)
-    sites = fill_sites(lay, layers, windows, rules, top=top, pdk=pdk, layer_map=layer_map)
-    kw = dict(kwargs)
-    kw.pop("cell_size", None)
-    process = kw.pop("process")
-    model = DieModel(cfg, process, blanket_rate=rate, **kw)
-    plan = plan_fill(windows, sites, model=model, time=t)
-    name = "fill.oas" if lay.format == "oas" else "fill.gds"
-    fill = plan.to_dict() | {"layer": f"{pair[0]}/{pair[1]}", "file": name if out_dir else None,
-                             "rules": {"size": rules.size, "spacing": rules.spacing, "keepout": rules.keepout, "edge": rules.edge,
-                                       "source": rules.source},
-                             "units": {"added_area": "m^2", "thickness_range": "m", "hotspot_count": "1", "rules": "m"}}
-    return replace(plan.after, fill=fill), plan, name

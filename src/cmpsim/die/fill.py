@@ -48,7 +48,7 @@ from .evolution import DieEvolution
 from .layout import Layout
 from .polish import DieResult
 
-__all__ = ["FillPlan", "plan_fill", "die_layout", "thickness", "thickness_range", "hotspot_count", "DEFAULT_LIMITS"]
+__all__ = ["FillPlan", "plan_fill", "fill_die", "die_layout", "thickness", "thickness_range", "hotspot_count", "DEFAULT_LIMITS"]
 
 #: Hotspot limits used by the library call when neither a model nor limits are given (m): a window's final
 #: surface more than 5 nm off the die's mean (the example of issue 33, ``--spec thickness=5nm``). ``cmpsim die
@@ -284,3 +284,44 @@ def plan_fill(windows, sites, *, model=None, time: float | None = None, config=N
                     summary_before=_summary(before, hotspot_counter), summary_after=_summary(after, hotspot_counter), sites=sites)
     plan.stats = {"seconds": _time.perf_counter() - t_start, "polishes": nsim, "windows": int(n.size)}
     return plan
+
+
+def fill_die(layout, layers, window: float, rules, fill_layer, *, top: str | None = None, pdk: str | None = None,
+             layer_map=None, config=None, process: str = "oxide", blanket_rate: float | None = None,
+             time: float | None = None, with_file: bool = True, progress=None, **model_options):
+    """The model-based fill of a real layout, as ``cmpsim die LAYOUT --fill`` runs it.
+
+    Reads ``layout`` (a path or a :class:`cmpsim.layout.Layout`), extracts the windows of ``layers``
+    (side ``window``, m), finds the free fill sites under ``rules``
+    (:func:`cmpsim.layout.fill.fill_sites`), and plans the fill (:func:`plan_fill`) on the die
+    command's own :class:`cmpsim.die.chip.DieModel` (``config``, ``process``, ``blanket_rate``
+    (default one wafer solve), ``time`` and ``model_options`` such as ``spec``, ``weighting``,
+    ``planarization_length``). ``fill_layer`` the fill's (layer, datatype). Returns (the filled
+    die's result with its JSON ``fill`` object, the :class:`FillPlan`, the fill file's name:
+    ``fill.oas`` for an OASIS layout, else ``fill.gds``; ``file`` in the object only
+    ``with_file``). ``progress`` a callable told (stage, done, total) by the extraction. ValueError
+    naming the option for a missing file or bad input.
+    """
+    from dataclasses import replace
+
+    from ..layout import Layout as LayoutFile
+    from ..layout import extract_windows, read_layout
+    from ..layout.fill import fill_sites
+    from .chip import DieModel
+
+    if not isinstance(layout, LayoutFile):
+        try:
+            layout = read_layout(layout)
+        except FileNotFoundError as exc:
+            raise ValueError(str(exc)) from None
+    windows = extract_windows(layout, layers, window, top=top, pdk=pdk, layer_map=layer_map, progress=progress)
+    sites = fill_sites(layout, layers, windows, rules, top=top, pdk=pdk, layer_map=layer_map)
+    model = DieModel(config, process, blanket_rate=blanket_rate, **model_options)
+    plan = plan_fill(windows, sites, model=model, time=time)
+    name = "fill.oas" if layout.format == "oas" else "fill.gds"
+    pair = tuple(fill_layer)
+    fill = plan.to_dict() | {"layer": f"{pair[0]}/{pair[1]}", "file": name if with_file else None,
+                             "rules": {"size": rules.size, "spacing": rules.spacing, "keepout": rules.keepout, "edge": rules.edge,
+                                       "source": rules.source},
+                             "units": {"added_area": "m^2", "thickness_range": "m", "hotspot_count": "1", "rules": "m"}}
+    return replace(plan.after, fill=fill), plan, name

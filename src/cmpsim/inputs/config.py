@@ -421,6 +421,11 @@ class Config:
         """Flat {name: SI value} of every input."""
         return {n: getattr(getattr(self, p.section), n) for n, p in PARAMETERS.items()}
 
+    def key(self) -> tuple:
+        """A hashable key of every input, ``((name, repr(SI value)), ...)`` sorted by name: equal for
+        equal configurations (the key of a cached solve; tuples and None included)."""
+        return tuple(sorted((k, repr(v)) for k, v in self.to_dict().items()))
+
     def to_sections(self) -> dict[str, dict[str, Any]]:
         """{section: {name: SI value}}, the layout of the TOML file."""
         return {s: {n: getattr(getattr(self, s), n) for n in _section_fields(s)} for s in _SECTIONS}

@@ -1,273 +1,211 @@
-"""Dummy fill geometry: the rules, the fill sites of every window, the squares, the file.
+"""Dummy fill geometry: the free fill sites of every window, the choice of squares, the file.
 
-The fill is a set of squares of side ``size`` on a lattice laid out window by window: in
-a window of side W the squares sit at ``x0 + spacing // 2 + i * pitch`` (``pitch = size +
-spacing``, ``i < W // pitch``), the same in y, so that every square lies inside one window
-(the density a square adds belongs to one window only) and two squares, in one window or
-in two neighbouring windows, are at least ``spacing`` apart.  A lattice site is **blocked**
-when its square would come closer than ``keepout`` to a drawn shape, or closer than
-``edge`` to the die's edge (the top cell's bounding box).  Blocking is decided on the
-shapes, not on the merged region:
+**The lattice.** The fill is a set of squares of side ``s`` (``size``) on a lattice laid out
+window by window: in a window of side W the squares' lower-left corners sit at
+``x0 + spacing // 2 + i * pitch`` (``pitch = size + spacing``, ``i < W // pitch``), the same in
+y, so that every square lies inside one window (the density a square adds belongs to one
+window only) and two squares, in one window or in two neighbouring windows, are at least
+``spacing`` apart.
 
-* a rectangle (x0, y0, x1, y1) blocks the sites whose centre lies in the open box
-  (x0 - keepout - size/2, x1 + keepout + size/2) x (the same in y): the square then
-  overlaps the rectangle grown by ``keepout`` (Chebyshev growth: a square at a Euclidean
-  distance >= keepout is a fortiori allowed).  A square at exactly ``keepout`` is allowed.
-* any other Manhattan polygon is cut into horizontal slabs (exact rectangles whose union
-  is the polygon), so the rule above stays exact;
-* a polygon with an oblique edge blocks as its bounding box (conservative: it never lets a
-  square violate the keep-out, it may forbid a few legal ones).
+**Blocked sites.** A site is blocked when its square would come closer than ``keepout`` (k)
+to a drawn shape, or closer than ``edge`` to the die's edge (the top cell's bounding box; a
+test on the lattice coordinates).  For the drawn shapes D (all layers, KLayout's deep,
+hierarchical region), with distances measured as boxes (Chebyshev: a square at Chebyshev
+distance >= k is at Euclidean distance >= k too):
 
-The blocked sites are marked with a 2-D difference array (four additions per rectangle,
-one cumulative sum), vectorised over all rectangles.  The hierarchy is used: every cell is
-flattened once into rectangles (in its own frame, cached) and each placement only
-transforms and translates that array (90-degree orientations; any other reference is
-flattened into its parent by gdstk).  Memory is one cell's rectangles at a time, not the
-chip's.
+* the square [x, x + s]^2 is blocked iff its open interior meets the open set D grown by the
+  box [-k, k]^2, i.e. iff its corner (x, y) lies in the interior of D (+) [-k - s, k]^2 (the
+  Minkowski sum).  A square at exactly ``keepout`` is allowed; so is one at exactly
+  ``keepout`` from two shapes on opposite sides;
+* the corners are integers (dbu).  In doubled coordinates (every shape magnified by 2, the
+  lattice at even numbers X = 2x) the open condition becomes a closed one with no rounding:
+  X is blocked iff it lies in the **closed** region H = 2D (+) [-(2s + E), E]^2, with E the
+  largest even integer below 2k (E = 2 ceil(k) - 2).  H is D magnified by 2, sized by
+  s + E with square corners and moved by (-s, -s): KLayout's deep ``sized`` (mode 2 keeps
+  the 90-degree corners square, so on Manhattan shapes it is exactly the box growth);
+* a closed region is a union of closed pieces, so H can be taken apart freely: every
+  polygon of H is cut into trapezoids (KLayout's decomposition; rectangles where H is
+  Manhattan) and a site is blocked iff it lies in the closed bounding box of one of them.
+  Exact on Manhattan shapes;
+* a drawn polygon with an oblique edge (e.g. SKY130's chamfered cell corners) is added
+  as its Minkowski sum with the box [-(2s + E + 2), E + 2]^2 (KLayout's ``minkowski_sum``,
+  exact: its distance is the box's, Chebyshev, where ``sized`` moves an oblique edge by the
+  Euclidean distance only; the 2 more cover the half-dbu of the closed test), and its
+  trapezoids (whose corners on an oblique side are rounded to the grid) block as their
+  bounding boxes grown by 1: conservative (never a square closer than ``keepout``, a few
+  legal sites lost near oblique edges).
 
-Only numpy and gdstk are imported (and cmpsim.layout); see docs/fill.md.
+**Cost.** H stays hierarchical: KLayout's deep region is inserted into a scratch layout
+(a cell per cell of the die where the grown shapes live), each cell's own trapezoids are
+computed once in its own frame, and the cells are placed by their instances (arrays,
+any rotation, mirror or magnification; a bounding box under a non-90-degree placement is
+taken conservatively); a cell with at most :data:`_FLAT_RECTS` rectangles below it is
+flattened once and pasted at each placement.  The boxes mark the lattice with a 2-D
+difference array (four additions per box, one cumulative sum), vectorised.  Growing and
+merging by KLayout is what keeps a whole chip fast: the grown shapes of a standard-cell
+macro merge into a few polygons, whatever its cell count.  (Subtracting H from the die's box
+and reading the free region instead would flatten it: 68 s on a 20 mm stepped chip where
+this takes 5-8 s.)
+
+Only numpy and KLayout (``klayout.db``) are imported, and cmpsim.layout; see docs/fill.md.
 """
 
 from __future__ import annotations
 
 import math
 import os
+import time
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
-import gdstk
+import klayout.db as kdb
 import numpy as np
 
 from .extract import LayoutWindows, dbu_count, window_fields
-from .hierarchy import _orientation, placements
+from .fillrules import FILL_RULES, FillRules, fill_rules, resolve_fill
 from .layermaps import parse_layer, resolve_layers
-from .reader import Layout, layers_in, read_layout, top_cell
+from .reader import Layout, LayoutTooLarge, layer_indexes, layers_in, read_layout, top_cell
 
-__all__ = ["FillRules", "FILL_RULES", "fill_rules", "FillSites", "fill_sites", "select_fill", "filled_windows",
-           "write_fill", "fill_polygons"]
+__all__ = ["FillRules", "FILL_RULES", "fill_rules", "resolve_fill", "FillSites", "fill_sites", "select_fill",
+           "filled_windows", "write_fill", "fill_polygons", "MAX_SITES"]
 
-
-@dataclass(frozen=True)
-class FillRules:
-    """The geometry rules of square dummy fill (all lengths in m).
-
-    ``size`` the side of a fill square; ``spacing`` the least distance between two fill
-    squares; ``keepout`` the least distance from a fill square to a drawn shape of the
-    layer; ``edge`` the least distance from a fill square to the die's edge (the top
-    cell's bounding box); ``source`` where the numbers come from.
-    """
-
-    size: float
-    spacing: float
-    keepout: float
-    edge: float = 0.0
-    source: str = "user"
-
-    def __post_init__(self) -> None:
-        for name in ("size", "spacing", "keepout", "edge"):
-            v = getattr(self, name)
-            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ValueError(f"fill rule {name} = {v!r} must be a length >= 0 m")
-        if self.size <= 0:
-            raise ValueError(f"fill rule size = {self.size!r} must be > 0 m")
-        if self.spacing <= 0:
-            raise ValueError(f"fill rule spacing = {self.spacing!r} must be > 0 m (squares must not touch)")
-
-    @property
-    def pitch(self) -> float:
-        """size + spacing (m): the lattice step."""
-        return self.size + self.spacing
-
-    def replace(self, **values) -> "FillRules":
-        """A copy with some rules changed (m); the source becomes "... with overrides"."""
-        values = {k: v for k, v in values.items() if v is not None}
-        if not values:
-            return self
-        src = self.source if "overrides" in self.source else f"{self.source}, with overrides"
-        return replace(self, **values, source=src)
+#: A cell whose blocking rectangles (its own and its children's) number at most this is flattened
+#: once and pasted at every placement; a larger one is walked through its instances.
+_FLAT_RECTS = 1_000_000
+#: Rectangles marked on the lattice per batch (bounds the memory of a walk).
+_BATCH = 2_000_000
+#: Lattice sites of one die above which fill_sites refuses (about 13 bytes each while marking).
+MAX_SITES = 300_000_000
 
 
-# The default rules per open PDK (m). Sources:
-# * gf180mcu: OpenROAD-flow-scripts, flow/platforms/gf180/fill.json (the density_fill rules
-#   of the GF180MCU platform): Metal1-5 non-OPC fill 2 um minimum side (widths 12/6/3/2 um by
-#   2 um), "space_to_fill" 1.0 um, "space_to_non_fill" 2.0 um, "space_to_outline" 5 um.
-# * sg13g2: OpenROAD-flow-scripts, flow/platforms/ihp-sg13g2/fill.json: Metal1-4 fill squares
-#   2.00/1.00/0.58/0.3(0.4) um, space_to_fill 0.3 um, space_to_non_fill 3 um; Metal5,
-#   TopMetal1-2 3 um squares, space_to_fill 1.6 um, space_to_non_fill 3 um; space_to_outline 70 um.
-#   The largest square is used (fewest shapes).
-# * sky130: ASSUMED, not read from the PDK here: the open_pdks fill generator (magic "cif
-#   ostyle wafflefill" in sky130A.tech, sky130/custom/scripts/generate_fill.py) makes square
-#   met1-met5 fill; its sizes were not read. 2 um squares, 1 um apart, 3 um from drawn metal
-#   are chosen to be legal under SKY130's metal width/space rules (met1 min width 0.14 um,
-#   space 0.14 um, periphery rules m1.1/m1.2) with margin. Override them for a tape-out.
-_UM = 1e-6
-_GF = FillRules(2.0 * _UM, 1.0 * _UM, 2.0 * _UM, 5.0 * _UM, "gf180mcu: OpenROAD-flow-scripts platforms/gf180/fill.json")
-_SG = FillRules(2.0 * _UM, 0.3 * _UM, 3.0 * _UM, 70.0 * _UM, "sg13g2: OpenROAD-flow-scripts platforms/ihp-sg13g2/fill.json")
-_SG_TOP = FillRules(3.0 * _UM, 1.6 * _UM, 3.0 * _UM, 70.0 * _UM, "sg13g2: OpenROAD-flow-scripts platforms/ihp-sg13g2/fill.json")
-_SKY = FillRules(2.0 * _UM, 1.0 * _UM, 3.0 * _UM, 0.0, "sky130: assumed (PDK fill sizes not read; see layout/fill.py)")
-
-#: pdk -> layer name -> FillRules (layer names as in :data:`cmpsim.layout.PDK_LAYER_MAPS`).
-FILL_RULES: dict[str, dict[str, FillRules]] = {
-    "sky130": {name: _SKY for name in ("li1", "met1", "met2", "met3", "met4", "met5")},
-    "gf180mcu": {name: _GF for name in ("metal1", "metal2", "metal3", "metal4", "metal5", "metaltop")},
-    "sg13g2": {**{f"metal{i}": _SG for i in range(1, 5)}, "metal5": _SG_TOP, "topmetal1": _SG_TOP, "topmetal2": _SG_TOP},
-}
+# ---------------------------------------------------------------------------------- the grown shapes
+def _grown(cell: kdb.Cell, lis, s: int, e: int, threads: int) -> tuple[kdb.Region, kdb.DeepShapeStore]:
+    """H of the module docstring (doubled dbu): the drawn shapes magnified by 2, sized by s + e and moved by
+    (-s, -s), with every polygon that has an oblique edge added as its Minkowski sum with the box
+    [-(2 s + e + 2), e + 2]^2; merged. A deep region (its store returned: the region lives as long as it)."""
+    store = kdb.DeepShapeStore()
+    store.threads = threads
+    twice = kdb.ICplxTrans(2.0)
+    drawn = None
+    for li in lis:
+        part = kdb.Region(cell.begin_shapes_rec(li), store, twice)
+        drawn = part if drawn is None else drawn + part
+    grown = drawn.sized(s + e)
+    grown.move(kdb.Vector(-s, -s))
+    oblique = drawn.non_rectilinear()
+    if not oblique.is_empty():
+        grown = grown + oblique.minkowski_sum(kdb.Box(-(2 * s + e + 2), -(2 * s + e + 2), e + 2, e + 2))
+        grown.merge()
+    return grown, store
 
 
-def fill_rules(pdk: str | None = None, layer: str | None = None, **overrides) -> FillRules:
-    """The fill rules of ``pdk`` for ``layer`` (a name; default its first metal), overrides applied.
-
-    Without a PDK every rule must be given (``size``, ``spacing``, ``keepout``; ``edge``
-    defaults to 0). Raises ValueError naming the parameter and the valid values.
-    """
-    if pdk is None:
-        missing = [k for k in ("size", "spacing", "keepout") if overrides.get(k) is None]
-        if missing:
-            raise ValueError(f"fill rules without a pdk need {', '.join(missing)} (or pdk = one of {sorted(FILL_RULES)})")
-        return FillRules(**{k: v for k, v in overrides.items() if v is not None})
-    if pdk not in FILL_RULES:
-        raise ValueError(f"pdk {pdk!r} has no fill rules; valid: {sorted(FILL_RULES)}")
-    table = FILL_RULES[pdk]
-    name = next(iter(table)) if layer is None else str(layer).lower()
-    if name not in table:
-        raise ValueError(f"layer {layer!r} has no fill rules in {pdk}; valid: {sorted(table)}")
-    return table[name].replace(**overrides)
+def _matrix(t: kdb.ICplxTrans) -> tuple[np.ndarray, bool]:
+    """The 2x2 matrix of a placement (rotation, mirror about x first, magnification) and whether it
+    maps integer boxes to integer boxes exactly (a multiple of 90 degrees, magnification 1)."""
+    a = math.radians(t.angle)
+    c, s = math.cos(a), math.sin(a)
+    quarter = abs(t.angle / 90.0 - round(t.angle / 90.0)) < 1e-9
+    if quarter:
+        c, s = float(round(c)), float(round(s))
+    m = t.mag * np.array([[c, -s], [s, c]])
+    if t.is_mirror():
+        m = m @ np.array([[1.0, 0.0], [0.0, -1.0]])
+    return m, quarter and abs(t.mag - 1.0) < 1e-12
 
 
-# ---------------------------------------------------------------------------------- rectangles
-def _slabs(pts: np.ndarray) -> np.ndarray | None:
-    """Rectangles (k, 4) whose union is the Manhattan polygon ``pts`` (even-odd), or None if oblique."""
-    nxt = np.roll(pts, -1, axis=0)
-    vertical = pts[:, 0] == nxt[:, 0]
-    horizontal = pts[:, 1] == nxt[:, 1]
-    if not np.all(vertical | horizontal):
-        return None
-    ex = pts[vertical, 0]
-    ey0 = np.minimum(pts[vertical, 1], nxt[vertical, 1])
-    ey1 = np.maximum(pts[vertical, 1], nxt[vertical, 1])
-    ys = np.unique(pts[:, 1])
-    out = []
-    for ya, yb in zip(ys[:-1], ys[1:]):
-        ym = 0.5 * (ya + yb)
-        xs = np.sort(ex[(ey0 < ym) & (ey1 > ym)])
-        for xa, xb in zip(xs[0::2], xs[1::2]):
-            if xb > xa:
-                out.append((xa, ya, xb, yb))
-    return np.array(out, dtype=float).reshape(-1, 4)
+def _place(r: np.ndarray, m: np.ndarray, exact: bool, t: np.ndarray) -> np.ndarray:
+    """Boxes (n, 4) under x' = m x + t for every translation t (k, 2): (k n, 4) bounding boxes
+    (exact under 90-degree placements, rounded outwards otherwise)."""
+    xs = (r[:, 0], r[:, 2])
+    ys = (r[:, 1], r[:, 3])
+    cx = np.stack([m[0, 0] * x + m[0, 1] * y for x in xs for y in ys], axis=1)
+    cy = np.stack([m[1, 0] * x + m[1, 1] * y for x in xs for y in ys], axis=1)
+    b = np.stack([cx.min(axis=1), cy.min(axis=1), cx.max(axis=1), cy.max(axis=1)], axis=1)
+    if not exact:
+        b = np.concatenate([np.floor(b[:, :2]), np.ceil(b[:, 2:])], axis=1)
+    return (b[None, :, :] + t[:, None, [0, 1, 0, 1]]).reshape(-1, 4)
 
 
-def _polygon_rects(polys) -> np.ndarray:
-    """(n, 4) rectangles covering the polygons: exact for Manhattan ones, the bounding box otherwise."""
-    rects = []
-    others = []
-    for p in polys:
-        pts = p.points if isinstance(p, gdstk.Polygon) else np.asarray(p, float)
-        if len(pts) == 4:
-            x0, y0 = pts.min(axis=0)
-            x1, y1 = pts.max(axis=0)
-            # an axis-parallel rectangle has only two distinct x and two distinct y
-            if np.count_nonzero(pts[:, 0] == x0) == 2 and np.count_nonzero(pts[:, 1] == y0) == 2:
-                rects.append((x0, y0, x1, y1))
-                continue
-        others.append(pts)
-    blocks = [np.array(rects, dtype=float).reshape(-1, 4)]
-    for pts in others:
-        r = _slabs(pts)
-        if r is None:  # oblique: its bounding box (conservative)
-            r = np.array([[*pts.min(axis=0), *pts.max(axis=0)]])
-        blocks.append(r)
-    return np.concatenate(blocks)
+class _Boxes:
+    """The blocking boxes of a hierarchical region, cell by cell (doubled dbu, each cell's frame)."""
 
+    def __init__(self, layout: kdb.Layout, layer: int):
+        self.layout, self.layer = layout, layer
+        self._own: dict[int, np.ndarray] = {}
+        self._flat: dict[int, np.ndarray] = {}
+        self._count: dict[int, int] = {}
+        self._insts: dict[int, list] = {}
+        self.stats = {"cells": 0, "visits": 0, "rectangles": 0}
 
-class _CellRects:
-    """Each cell flattened once into rectangles (dbu, cell frame) on the layers, by reference placement."""
+    def own(self, ci: int) -> np.ndarray:
+        """The closed boxes of the trapezoids of the cell's own shapes."""
+        if ci not in self._own:
+            shapes = self.layout.cell(ci).shapes(self.layer)
+            out = np.zeros((0, 4))
+            if not shapes.is_empty():
+                traps = kdb.Region(shapes).decompose_trapezoids_to_region(kdb.Polygon.TD_htrapezoids)
+                n = traps.count()
+                # a trapezoid with an oblique side has corners rounded to the grid: its box is taken 1 unit larger
+                out = np.fromiter((v for p in traps.each() for b in (p.bbox() if p.is_box() else p.bbox().enlarged(1, 1),)
+                                   for v in (b.left, b.bottom, b.right, b.top)), dtype=np.float64, count=4 * n).reshape(n, 4)
+            self._own[ci] = out
+            self.stats["cells"] += 1
+        return self._own[ci]
 
-    def __init__(self, library: gdstk.Library, layers, flat_limit: int = 2_000_000):
-        self.cells = {c.name: c for c in library.cells if isinstance(c, gdstk.Cell)}
-        self.layers = tuple(sorted(set(layers)))
-        self.flat_limit = flat_limit
-        self._rects: dict[str, np.ndarray] = {}
-        self.stats = {"cells_flattened": 0, "placements": 0, "rectangles": 0}
+    def instances(self, ci: int) -> list:
+        """(child, matrix, exact, (k, 2) translations) of the cell's instances, arrays expanded."""
+        if ci not in self._insts:
+            out = []
+            for inst in self.layout.cell(ci).each_inst():
+                t = inst.cplx_trans
+                m, exact = _matrix(t)
+                d = np.array([[float(t.disp.x), float(t.disp.y)]])
+                if inst.is_regular_array():
+                    a, b = inst.a, inst.b
+                    i, j = np.meshgrid(np.arange(inst.na), np.arange(inst.nb), indexing="ij")
+                    d = d + np.stack([i.ravel() * a.x + j.ravel() * b.x, i.ravel() * a.y + j.ravel() * b.y], axis=1)
+                out.append((inst.cell_index, m, exact, d))
+            self._insts[ci] = out
+        return self._insts[ci]
 
-    def own(self, name: str) -> np.ndarray:
-        """The cell's own shapes plus those of references that are not 90-degree placements."""
-        key = ("own", name)
-        if key not in self._rects:
-            cell = self.cells[name]
-            polys = []
-            for layer, dtype in self.layers:
-                polys.extend(cell.get_polygons(depth=0, layer=layer, datatype=dtype))
-                for ref in cell.references:
-                    if isinstance(ref.cell, gdstk.Cell) and _orientation(ref.rotation, ref.x_reflection, ref.magnification) is None:
-                        polys.extend(ref.get_polygons(layer=layer, datatype=dtype))
-            self._rects[key] = _polygon_rects(polys)
-        return self._rects[key]
+    def count(self, ci: int) -> int:
+        if ci not in self._count:
+            self._count[ci] = len(self.own(ci)) + sum(len(d) * self.count(c) for c, _, _, d in self.instances(ci))
+        return self._count[ci]
 
-    def placements(self, name: str):
-        """(child, matrix, (n, 2) translations) of the 90-degree references of a cell."""
-        return placements(self.cells[name])
+    def flat(self, ci: int) -> np.ndarray:
+        """Every box below the cell, in its frame (cached)."""
+        if ci not in self._flat:
+            parts = [self.own(ci)] + [_place(self.flat(c), m, ex, d) for c, m, ex, d in self.instances(ci) if self.count(c)]
+            self._flat[ci] = np.concatenate(parts)
+        return self._flat[ci]
 
-    def flat(self, name: str) -> np.ndarray:
-        """All rectangles of the cell (its frame), flattened once and cached."""
-        if name not in self._rects:
-            parts = [self.own(name)]
-            for child, m, t in self.placements(name):
-                r = _orient(self.flat(child), m)
-                parts.append((r[None, :, :] + np.concatenate([t, t], axis=1)[:, None, :]).reshape(-1, 4))
-            self._rects[name] = np.concatenate(parts)
-            self.stats["cells_flattened"] += 1
-        return self._rects[name]
-
-    def walk(self, name: str, visit, m=(1, 0, 0, 1), t=(0.0, 0.0), budget: int | None = None):
-        """Call ``visit(rects)`` with the chip-frame rectangles, placement by placement.
-
-        A cell whose flattened rectangles number at most ``flat_limit`` is flattened once and
-        visited at each placement; a larger one is walked through its own references.
-        """
-        count = self.count(name)
-        if count <= self.flat_limit or not self.placements(name):
-            r = _orient(self.flat(name), m)
-            r[:, [0, 2]] += t[0]
-            r[:, [1, 3]] += t[1]
-            self.stats["placements"] += 1
-            self.stats["rectangles"] += len(r)
-            visit(r)
+    def walk(self, ci: int, m: np.ndarray, exact: bool, t: np.ndarray, visit) -> None:
+        """Call ``visit(boxes)`` with the boxes of the cell placed at x' = m x + t (every t), in batches."""
+        if self.count(ci) <= _FLAT_RECTS:
+            r = self.flat(ci)
+            if len(r):
+                step = max(1, _BATCH // len(r))
+                for k in range(0, len(t), step):
+                    self._visit(_place(r, m, exact, t[k:k + step]), visit)
             return
-        r = _orient(self.own(name), m)
-        r[:, [0, 2]] += t[0]
-        r[:, [1, 3]] += t[1]
-        visit(r)
-        for child, mc, ts in self.placements(name):
-            mm = _compose(m, mc)
-            for tc in ts:
-                tx = m[0] * tc[0] + m[1] * tc[1] + t[0]
-                ty = m[2] * tc[0] + m[3] * tc[1] + t[1]
-                self.walk(child, visit, mm, (tx, ty))
+        if len(self.own(ci)):
+            step = max(1, _BATCH // len(self.own(ci)))
+            for k in range(0, len(t), step):
+                self._visit(_place(self.own(ci), m, exact, t[k:k + step]), visit)
+        for c, mc, exc, d in self.instances(ci):
+            if not self.count(c):
+                continue
+            moved = d @ m.T  # the child's translations in the frame above
+            step = max(1, _BATCH // len(d))
+            for k in range(0, len(t), step):
+                tt = (t[k:k + step, None, :] + moved[None, :, :]).reshape(-1, 2)
+                self.walk(c, m @ mc, exact and exc, tt, visit)
 
-    def count(self, name: str) -> int:
-        key = ("count", name)
-        if key not in self._rects:
-            cell = self.cells[name]
-            n = sum(len(cell.get_polygons(depth=0, layer=l, datatype=d)) for l, d in self.layers)
-            for child, _, t in self.placements(name):
-                n += len(t) * self.count(child)
-            self._rects[key] = n
-        return self._rects[key]
-
-
-def _compose(m, n):
-    return (m[0] * n[0] + m[1] * n[2], m[0] * n[1] + m[1] * n[3], m[2] * n[0] + m[3] * n[2], m[2] * n[1] + m[3] * n[3])
-
-
-def _orient(r: np.ndarray, m) -> np.ndarray:
-    """Rectangles (n, 4) under a 90-degree orientation matrix m (a copy)."""
-    if m == (1, 0, 0, 1):
-        return r.copy()
-    xa = m[0] * r[:, 0] + m[1] * r[:, 1]
-    ya = m[2] * r[:, 0] + m[3] * r[:, 1]
-    xb = m[0] * r[:, 2] + m[1] * r[:, 3]
-    yb = m[2] * r[:, 2] + m[3] * r[:, 3]
-    return np.stack([np.minimum(xa, xb), np.minimum(ya, yb), np.maximum(xa, xb), np.maximum(ya, yb)], axis=1)
+    def _visit(self, boxes: np.ndarray, visit) -> None:
+        self.stats["visits"] += 1
+        self.stats["rectangles"] += len(boxes)
+        visit(boxes)
 
 
 # ---------------------------------------------------------------------------------- sites
@@ -316,17 +254,21 @@ class FillSites:
         return float(self.size) ** 2 / float(self.window) ** 2
 
 
+def _too_large(what: str, exc: BaseException | None = None) -> LayoutTooLarge:
+    detail = f" ({str(exc).strip()})" if exc is not None and str(exc).strip() else ""
+    return LayoutTooLarge(f"{what} does not fit in this machine's memory{detail}: choose a larger window (--window), "
+                          "a smaller region (--top a sub-cell) or more memory")
+
+
 def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindows, rules: FillRules, *,
-               top: str | None = None, pdk: str | None = None, layer_map=None, flat_limit: int = 2_000_000) -> FillSites:
+               top: str | None = None, pdk: str | None = None, layer_map=None) -> FillSites:
     """The free fill sites of every window of ``windows`` (the grid of :func:`extract_windows`).
 
     ``layers`` are the drawn layers the fill must keep ``rules.keepout`` away from (the same
-    specs as :func:`extract_windows`; pairs the file lacks are skipped, none of them present is an
-    error). The window side
-    must hold at least one pitch. Cost: one pass over the rectangles of every placement.
+    specs as :func:`extract_windows`; pairs the file lacks are skipped, none of them present is
+    an error). The window side must hold at least one pitch. Raises ValueError naming the rule
+    or option, :class:`LayoutTooLarge` when the lattice or the shapes do not fit the machine.
     """
-    import time
-
     t0 = time.perf_counter()
     if not isinstance(layout, Layout):
         layout = read_layout(layout)
@@ -343,43 +285,64 @@ def fill_sites(layout: Layout | str | os.PathLike, layers, windows: LayoutWindow
     W = dbu_count(windows.window, dbu, "window")
     s = dbu_count(rules.size, dbu, "fill size")
     g = dbu_count(rules.spacing, dbu, "fill spacing")
-    k = rules.keepout / dbu
+    k = round(rules.keepout / dbu, 6)  # keepout in dbu, need not be whole
     e = rules.edge / dbu
     p = s + g
     m = W // p
     if m < 1:
         raise ValueError(f"window = {windows.window:g} m is smaller than one fill pitch ({rules.pitch:g} m): choose a larger window")
     ny, nx = windows.density.shape
+    if ny * m * nx * m > MAX_SITES:
+        raise LayoutTooLarge(f"the fill lattice of {ny * m:,} x {nx * m:,} sites (pitch {rules.pitch:g} m) is more than the "
+                             f"{MAX_SITES:,} this machine's memory is sized for: choose a larger fill pitch (--fill-size, "
+                             "--fill-spacing) or a smaller region (--top a sub-cell)")
     ox, oy = dbu_count(windows.origin[0], dbu, "origin x"), dbu_count(windows.origin[1], dbu, "origin y")
     i = np.arange(m)
-    lx = (ox + (np.arange(nx)[:, None] * W + g // 2 + i[None, :] * p)).ravel().astype(float)
-    ly = (oy + (np.arange(ny)[:, None] * W + g // 2 + i[None, :] * p)).ravel().astype(float)
-    cxs, cys = lx + 0.5 * s, ly + 0.5 * s
-    diff = np.zeros((len(cys) + 1, len(cxs) + 1), dtype=np.int32)
-    grow = k + 0.5 * s
+    lx = (ox + (np.arange(nx)[:, None] * W + g // 2 + i[None, :] * p)).ravel().astype(np.int64)
+    ly = (oy + (np.arange(ny)[:, None] * W + g // 2 + i[None, :] * p)).ravel().astype(np.int64)
+    X2, Y2 = 2 * lx, 2 * ly  # the lattice in doubled dbu
+    E = 2 * math.ceil(k) - 2  # the largest even integer below 2k
+    diff = np.zeros((len(ly) + 1, len(lx) + 1), dtype=np.int32)
 
     def visit(r: np.ndarray) -> None:
-        if not len(r):
-            return
-        x0 = np.searchsorted(cxs, r[:, 0] - grow, side="right")
-        x1 = np.searchsorted(cxs, r[:, 2] + grow, side="left")
-        y0 = np.searchsorted(cys, r[:, 1] - grow, side="right")
-        y1 = np.searchsorted(cys, r[:, 3] + grow, side="left")
-        ok = (x1 > x0) & (y1 > y0)
-        x0, x1, y0, y1 = x0[ok], x1[ok], y0[ok], y1[ok]
-        np.add.at(diff, (y0, x0), 1)
-        np.add.at(diff, (y0, x1), -1)
-        np.add.at(diff, (y1, x0), -1)
-        np.add.at(diff, (y1, x1), 1)
+        i0 = np.searchsorted(X2, r[:, 0], side="left")
+        i1 = np.searchsorted(X2, r[:, 2], side="right")
+        j0 = np.searchsorted(Y2, r[:, 1], side="left")
+        j1 = np.searchsorted(Y2, r[:, 3], side="right")
+        ok = (i1 > i0) & (j1 > j0)
+        i0, i1, j0, j1 = i0[ok], i1[ok], j0[ok], j1[ok]
+        np.add.at(diff, (j0, i0), 1)
+        np.add.at(diff, (j0, i1), -1)
+        np.add.at(diff, (j1, i0), -1)
+        np.add.at(diff, (j1, i1), 1)
 
-    engine = _CellRects(layout.library, pairs, flat_limit=flat_limit)
-    engine.walk(cell.name, visit)
-    blocked = np.cumsum(np.cumsum(diff, axis=0), axis=1)[:-1, :-1] > 0
-    (bx0, by0), (bx1, by1) = np.round(cell.bounding_box())
-    inside_x = (lx >= bx0 + e) & (lx + s <= bx1 - e)
-    inside_y = (ly >= by0 + e) & (ly + s <= by1 - e)
+    try:
+        grown, store = _grown(cell, layer_indexes(layout, pairs), s, E, max(1, min(2, os.cpu_count() or 1)))
+        scratch = kdb.Layout()
+        scratch.dbu = layout.db.dbu / 2.0
+        root = scratch.create_cell("BLOCKED")
+        li = scratch.layer(1, 0)
+        scratch.insert(root.cell_index(), li, grown)
+        del grown, store
+        # cells with no grown shape below them are dropped with their instances (most standard cells)
+        empty = [c.cell_index() for c in scratch.each_cell() if c.cell_index() != root.cell_index() and c.bbox(li).empty()]
+        if empty:
+            scratch.delete_cells(empty)
+        boxes = _Boxes(scratch, li)
+        boxes.walk(root.cell_index(), np.eye(2), True, np.zeros((1, 2)), visit)
+    except MemoryError as exc:
+        raise _too_large(f"the fill keep-out of layers {sorted(pairs)} under {cell.name!r}", exc) from None
+    except RuntimeError as exc:
+        if "bad_alloc" in str(exc) or "memory" in str(exc).lower():
+            raise _too_large(f"the fill keep-out of layers {sorted(pairs)} under {cell.name!r}", exc) from None
+        raise
+    blocked = np.cumsum(np.cumsum(diff, axis=0, dtype=np.int32), axis=1, dtype=np.int32)[:-1, :-1] > 0
+    del diff
+    box = cell.bbox()
+    inside_x = (lx >= box.left + e) & (lx + s <= box.right - e)
+    inside_y = (ly >= box.bottom + e) & (ly + s <= box.top - e)
     free = ~blocked & inside_y[:, None] & inside_x[None, :]
-    stats = dict(engine.stats, seconds=time.perf_counter() - t0, sites=int(free.size), free=int(free.sum()))
+    stats = dict(boxes.stats, seconds=time.perf_counter() - t0, sites=int(free.size), free=int(free.sum()))
     return FillSites(free, lx, ly, int(m), int(W), int(s), (ox, oy), dbu, rules, (ny, nx), stats)
 
 
@@ -423,21 +386,30 @@ def filled_windows(windows: LayoutWindows, sites: FillSites, chosen: np.ndarray)
 
 
 # ---------------------------------------------------------------------------------- output
-def fill_polygons(sites: FillSites, chosen: np.ndarray, layer: int = 0, datatype: int = 0) -> list[gdstk.Polygon]:
-    """The chosen squares as flat gdstk rectangles (dbu) - for tests and small dies."""
+def fill_polygons(sites: FillSites, chosen: np.ndarray) -> np.ndarray:
+    """The chosen squares as an (n, 4) int64 array of boxes (x0, y0, x1, y1; dbu, the die's frame)."""
     iy, ix = np.nonzero(chosen)
-    s = sites.size
-    return [gdstk.rectangle((x, y), (x + s, y + s), layer=layer, datatype=datatype)
-            for x, y in zip(sites.cx[ix], sites.cy[iy])]
+    x, y = sites.cx[ix], sites.cy[iy]
+    return np.stack([x, y, x + sites.size, y + sites.size], axis=1).astype(np.int64)
+
+
+def _runs(ix: np.ndarray, iy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Windows (row-major, sorted) grouped into runs along x: (first ix, iy, length) of each."""
+    brk = np.ones(len(ix), dtype=bool)
+    brk[1:] = (iy[1:] != iy[:-1]) | (ix[1:] != ix[:-1] + 1)
+    start = np.nonzero(brk)[0]
+    length = np.diff(np.append(start, len(ix)))
+    return ix[start], iy[start], length
 
 
 def write_fill(path: str | os.PathLike, sites: FillSites, chosen: np.ndarray, layer, *, cell_name: str = "CMPSIM_FILL") -> Path:
-    """Write the chosen squares as a GDSII (``.gds``) or OASIS (``.oas``) library, atomically.
+    """Write the chosen squares as a GDSII (``.gds``) or OASIS (``.oas``) file with KLayout, atomically.
 
     ``layer`` is ``"L/D"`` or (layer, datatype). The top cell ``cell_name`` places, per
     window, a cell holding that window's pattern of squares; windows with the same pattern
-    (every fully free window with the same count) share one cell, so the file grows with
-    the number of distinct patterns and windows, not squares. Units: the layout's dbu.
+    (every fully free window with the same count) share one cell, placed as one array per run
+    of neighbouring windows along x, so the file grows with the number of distinct patterns
+    and runs, not squares. Units: the layout's dbu. Nothing is written on error.
     """
     pair = parse_layer(layer) if isinstance(layer, str) else (tuple(layer) if layer is not None else None)
     if pair is None:
@@ -449,37 +421,40 @@ def write_fill(path: str | os.PathLike, sites: FillSites, chosen: np.ndarray, la
     ny, nx = sites.shape
     m = sites.per_window
     W, s = sites.window, sites.size
-    lib = gdstk.Library(unit=sites.dbu, precision=sites.dbu)
-    top = lib.new_cell(cell_name)
+    ly = kdb.Layout()
+    ly.dbu = sites.dbu * 1e6  # um
+    li = ly.layer(int(pair[0]), int(pair[1]))
+    top = ly.create_cell(cell_name)
     pats = chosen.reshape(ny, m, nx, m).transpose(0, 2, 1, 3).reshape(ny * nx, m * m)
     used = np.nonzero(pats.any(axis=1))[0]
     if used.size:
         packed = np.packbits(pats[used], axis=1)
         uniq, inverse = np.unique(packed, axis=0, return_inverse=True)
         inverse = np.asarray(inverse).ravel()
-        g2 = sites.cx[1] - sites.cx[0] if m > 1 else 0  # the pitch (unused with m == 1)
-        base = sites.cx[0] - sites.origin[0]  # the margin of the first site in a window
+        # the corners inside a window (relative to its lower-left corner): the lattice is the same in every window
+        rel_x = sites.cx[:m] - sites.origin[0]
+        rel_y = sites.cy[:m] - sites.origin[1]
+        step = kdb.Vector(int(W), 0)
         for u in range(len(uniq)):
-            bits = np.unpackbits(uniq[u])[: m * m].reshape(m, m).astype(bool)
-            a, b = np.nonzero(bits)  # a along y, b along x
-            pc = lib.new_cell(f"{cell_name}_P{u}")
-            for yy, xx in zip(a, b):
-                x = base + xx * g2
-                y = base + yy * g2
-                pc.add(gdstk.rectangle((x, y), (x + s, y + s), layer=pair[0], datatype=pair[1]))
+            a, b = np.nonzero(np.unpackbits(uniq[u])[: m * m].reshape(m, m))  # a along y, b along x
+            pc = ly.create_cell(f"{cell_name}_P{u}")
+            shapes = pc.shapes(li)
+            for x, y in zip(rel_x[b].tolist(), rel_y[a].tolist()):
+                shapes.insert(kdb.Box(x, y, x + s, y + s))
             wins = used[inverse == u]
-            offs = np.stack([sites.origin[0] + (wins % nx) * W, sites.origin[1] + (wins // nx) * W], axis=1).astype(float)
-            if len(offs) == 1:
-                top.add(gdstk.Reference(pc, tuple(offs[0])))
-            else:
-                # an explicit repetition holds the origin implicitly: the offsets are of the other copies
-                ref = gdstk.Reference(pc, tuple(offs[0]))
-                ref.repetition = gdstk.Repetition(offsets=[tuple(o) for o in offs[1:] - offs[0]])
-                top.add(ref)
+            for jx, jy, n in zip(*(v.tolist() for v in _runs(wins % nx, wins // nx))):
+                at = kdb.Trans(kdb.Vector(int(sites.origin[0] + jx * W), int(sites.origin[1] + jy * W)))
+                if n == 1:
+                    top.insert(kdb.CellInstArray(pc.cell_index(), at))
+                else:
+                    top.insert(kdb.CellInstArray(pc.cell_index(), at, step, kdb.Vector(0, int(W)), n, 1))
+    options = kdb.SaveLayoutOptions()
+    options.format = "GDS2" if suffix == ".gds" else "OASIS"
     tmp = path.with_name(path.name + ".tmp" + suffix)
-    if suffix == ".gds":
-        lib.write_gds(str(tmp))
-    else:
-        lib.write_oas(str(tmp))
-    os.replace(tmp, path)
+    try:
+        ly.write(str(tmp), options)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
     return path

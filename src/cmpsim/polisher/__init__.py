@@ -11,8 +11,10 @@ integration: one wafer solve per distinct step inputs, every film's removal rate
 pad's temperature from :mod:`cmpsim.physics.thermal` driven by the frictional power and setting
 the Arrhenius chemical step; :func:`cmpsim.polisher.engine.polish`, ``cmpsim.polish``),
 ``pad`` (the pad's life through a recipe's time steps: glazing, conditioning, the worn summits),
-``report`` (the JSON, CSV and plots of ``cmpsim polish --out DIR``), ``control`` (the EWMA
-run-to-run controller), ``incoming`` (a lot's incoming profiles) and ``ride`` (a layout riding
+``report`` (the JSON, CSV and plots of ``cmpsim polish --out DIR``), ``control`` (the run-to-run
+rate estimators: the double EWMA of the rate and its drift, the single EWMA), ``zones`` (the zone
+feedback that takes only steps it predicts lower the non-uniformity), ``checkpoint`` (a lot's
+state between wafers, for ``--resume``), ``incoming`` (a lot's incoming profiles) and ``ride`` (a layout riding
 along, ``cmpsim polish --die``: the die model of :mod:`cmpsim.die` at a few wafer sites, driven step
 by step by the blanket depth and the duration of each step).
 

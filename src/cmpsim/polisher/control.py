@@ -1,132 +1,206 @@
-"""Run-to-run control of a lot: the EWMA controller of the fab (issue 32).
+"""Run-to-run control of a lot: the estimators of the removal rate, picked by name (issues 32, 38).
 
-The exponentially weighted moving average (EWMA) controller of Sachs, Hu and Ingolfsson (IEEE
-Trans. Semicond. Manuf. 8 (1995) 26), as used for CMP by Boning et al. (MRS 1999: thickness held
-to +-10 nm of target with two products alternating): the controller keeps an estimate of the
-process and updates it after each wafer with weight ``weight`` (lambda),
+The lot sets each wafer's polish time from the thickness measured before the wafer and the rate
+an estimator predicts for it (feed-forward, eq. C0); after the wafer the estimator learns the
+rate the wafer had (``removed / time``). The estimators are a small family behind one protocol,
+:class:`RateEstimator` (``predict(age)``, ``update(rate, age)``, ``to_dict()``), picked by name in one
+place, :data:`ESTIMATORS` / :func:`make_estimator`:
 
-    rate_{k+1} = lambda * removed_k / time_k + (1 - lambda) * rate_k,                 (mean rate)
+``"single_ewma"`` (:class:`SingleEWMA`): the EWMA controller of Sachs, Hu and Ingolfsson (IEEE
+Trans. Semicond. Manuf. 8 (1995) 26) as used for CMP by Boning et al. (MRS 1999), here on the
+process gain (the rate), the lot's controller of issue 32::
 
-and sets the next wafer's polish time from the thickness measured before it (feed-forward):
+    a_k = lambda_1 r_k + (1 - lambda_1) a_(k-1),       predicted rate  a_k            (C1)
 
-    time_{k+1} = (incoming_mean_{k+1} - target) / rate_{k+1}.
+A single EWMA lags a drifting process: for r_k = r_0 + delta k its prediction settles at
+r_(k+1) - delta / lambda_1 (the pad glazes and the estimate chases it; Chen & Guo 2001).
 
-The zone pressures follow the last wafer's post-polish profile (feedback): the shape of its
-remaining thickness about its mean, e(r), filtered with the same kind of average,
-e_f <- lambda_z e + (1 - lambda_z) e_f, is removed on the next wafer by the pressure change that
-the zone response R = d rate(r) / d P_k (m/s/Pa, :func:`cmpsim.head.zone_response.response_matrix`)
-says removes it in the polish time: R' t dP = e_f in the area-weighted least-squares sense (R'
-the response about its wafer-area mean: the mean is the polish time's to set), with
-a small Tikhonov term because neighbouring zones' responses overlap (the problem is ill
-conditioned: docs/model.md 13f), keeping the load (sum_k A_k dP_k = 0: a uniform change of the
-zones moves the mean rate, which is the polish time's to set, and barely the shape), and within
-the zone-pressure bounds.
+``"ewma"`` (:class:`DoubleEWMA`, the default of ``cmpsim lot --control ewma``): the double EWMA, a
+level a and a drift D per unit of pad age A (the predictor-corrector controller, PCC, of Butler &
+Stefani, IEEE Trans. Semicond. Manuf. 7 (1994) 193, estimates the same two; Chen & Guo, IEEE Trans.
+Semicond. Manuf. 14 (2001) 19, take the drift per unit of pad age for CMP). The level is carried
+forward by the drift (Holt's form), which makes it exact at any age spacing::
 
-A single EWMA lags a drifting process (pad wear: Chen & Guo, IEEE TSM 14 (2001) 19 propose an
-age-based double EWMA); the lag is visible in the lot's first wafers and is reported, not hidden.
-Pure logic on numbers: the solves are the caller's (:mod:`cmpsim.polisher.lot`).
+    a_k = lambda_1 r_k + (1 - lambda_1) (a_(k-1) + D_(k-1) dA_k)                       (C2)
+    D_k = lambda_2 (a_k - a_(k-1)) / dA_k + (1 - lambda_2) D_(k-1)      (dA_k != 0)   (C3)
+    predicted rate of a wafer of age A:  a_k + D_k (A - A_k)                            (C4)
+
+On a drift linear in the age, r = r_0 + delta A, a_k = r_k and D_k = delta is a fixed point of
+C2-C3 whatever the spacing dA_k, so the prediction has no steady-state offset
+(tests/test_lot_control.py checks it on a synthetic process, with unit and random age steps).
+The age is the wafer's on a ``clock`` (:data:`CLOCKS`): "glazing", the pad-life model's rate
+factor averaged over the wafer (docs/polisher.md, eq. L4), or "wafer", its index (the PCC's per
+run). The first drift (C5, ``drift_prior``): "model", on the glazing clock, D_0 = a_0 / A_0 (the
+rate proportional to the glazing factor, what the pad-life model says), or "none", D_0 = 0.
+
+Weights: lambda_1 = 0.3, the lot's single-EWMA weight since issue 32 (the common textbook value,
+chosen before any lot ran); lambda_2 = 0.3, the same constant for the drift as for the level, as
+Brown's one-constant double exponential smoothing does. The values Butler & Stefani and Chen &
+Guo used were not read here (only the papers' abstracts and the equations' later statements);
+both weights are options (``cmpsim lot --weight, --drift-weight``).
+
+Feed-forward (Boning et al. 1999): the next wafer's time removes the measured incoming mean down to
+the target at the predicted rate,
+
+    t_(k+1) = (incoming_mean_(k+1) - target) / predicted rate.                            (C0)
+
+Pure logic on numbers: the solves are the caller's (:mod:`cmpsim.polisher.lot`); the zone feedback
+is :mod:`cmpsim.polisher.zones`.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+import math
+from dataclasses import asdict, dataclass, replace
+from typing import Protocol, runtime_checkable
 
-import numpy as np
+__all__ = ["RateEstimator", "SingleEWMA", "DoubleEWMA", "ESTIMATORS", "CONTROL", "make_estimator", "estimator_from_dict",
+           "feed_forward_time", "WEIGHT", "DRIFT_WEIGHT", "CLOCKS", "DRIFT_PRIORS"]
 
-__all__ = ["EWMAController", "ControllerState", "feed_forward_time", "update_rate", "zone_correction", "area_weights"]
+#: lambda_1 of eqs. C1/C2: the lot's EWMA weight since issue 32 (Sachs et al. 1995; Boning et al. 1999; chosen before any lot ran).
+WEIGHT = 0.3
+#: lambda_2 of eq. C3: the level's constant (one constant for level and drift, as Brown's double smoothing).
+DRIFT_WEIGHT = 0.3
+#: The pad-age clocks of the double EWMA: "glazing" (the pad-life model's rate factor over the wafer, eq. L4) or "wafer" (its index).
+CLOCKS = ("glazing", "wafer")
+#: The first drift of the double EWMA (eq. C5): "model" (the rate proportional to the pad-life model's glazing factor) or "none" (0).
+DRIFT_PRIORS = ("model", "none")
+#: Two ages closer than this (relative) are one: the drift is not updated across them.
+AGE_RESOLUTION = 1e-9
+
+
+def _check_weight(name: str, value: float) -> None:
+    if not (isinstance(value, (int, float)) and math.isfinite(value) and 0.0 < value <= 1.0):
+        raise ValueError(f"{name} (an EWMA weight) must be in (0, 1]; got {value!r}")
+
+
+def _check_rate(rate: float, what: str) -> None:
+    if not (isinstance(rate, (int, float)) and math.isfinite(rate) and rate > 0.0):
+        raise ValueError(f"{what} must be a removal rate > 0 m/s; got {rate!r}")
+
+
+@runtime_checkable
+class RateEstimator(Protocol):
+    """What the lot asks of a rate estimator: the rate it predicts for the next wafer (m/s), a new
+    estimator after a wafer whose measured mean rate was ``rate`` (m/s), and its state as a dict of
+    floats (the checkpoint of an interrupted lot, :mod:`cmpsim.polisher.checkpoint`)."""
+
+    name: str
+    clock: str
+
+    def predict(self, age: float) -> float: ...
+
+    def update(self, rate: float, age: float) -> "RateEstimator": ...
+
+    def to_dict(self) -> dict: ...
 
 
 @dataclass(frozen=True)
-class EWMAController:
-    """The controller's settings: ``target`` remaining thickness (m), EWMA weights of the rate and
-    of the profile (0 < lambda <= 1), the zone-pressure bounds (Pa) and the relative Tikhonov weight."""
+class SingleEWMA:
+    """The single EWMA of the rate (eq. C1): ``level`` a (m/s), ``weight`` lambda_1."""
 
-    target: float
-    weight: float = 0.3
-    zone_weight: float = 0.5
-    bounds: tuple[float, float] = (0.5 * 6894.757293168361, 8.0 * 6894.757293168361)
-    regularisation: float = 1e-3
+    level: float
+    weight: float = WEIGHT
+    name: str = "single_ewma"
 
     def __post_init__(self):
-        if not (np.isfinite(self.target) and self.target >= 0):
-            raise ValueError(f"target must be a remaining thickness >= 0 m; got {self.target!r}")
-        for name in ("weight", "zone_weight"):
-            value = getattr(self, name)
-            if not 0 < value <= 1:
-                raise ValueError(f"{name} (the EWMA weight) must be in (0, 1]; got {value!r}")
-        lo, hi = self.bounds
-        if not 0 <= lo < hi:
-            raise ValueError(f"bounds must be 0 <= low < high (Pa); got {self.bounds!r}")
+        _check_weight("weight", self.weight)
+        _check_rate(self.level, "the first rate estimate")
+
+    clock: str = "wafer"
+
+    def predict(self, age: float = 0.0) -> float:
+        """The next wafer's rate, m/s: the level (eq. C1), whatever its age."""
+        return self.level
+
+    def update(self, rate: float, age: float = 0.0) -> "SingleEWMA":
+        """Eq. C1 after a wafer of measured mean rate ``rate`` (m/s); the age is not used."""
+        return replace(self, level=self.weight * rate + (1.0 - self.weight) * self.level)
+
+    def to_dict(self) -> dict:
+        return asdict(self)
 
 
 @dataclass(frozen=True)
-class ControllerState:
-    """What the controller knows before a wafer: the estimated mean removal rate (m/s), the zone
-    pressures (Pa) and the filtered profile error (m, one value per radius; None before feedback)."""
+class DoubleEWMA:
+    """The double EWMA (predictor-corrector) of the rate on a pad-age clock (eqs. C2-C4): ``level`` a
+    (m/s) at the age ``age`` of the last wafer, ``drift`` D (m/s per unit of age), weights ``weight``
+    lambda_1 and ``drift_weight`` lambda_2, and the ``clock`` that gives a wafer its age
+    (:data:`CLOCKS`: "glazing", the pad-life model's rate factor over the wafer; "wafer", its index)."""
 
-    rate: float
-    zone_pressures: tuple
-    profile_error: np.ndarray | None = None
+    level: float
+    drift: float = 0.0
+    weight: float = WEIGHT
+    drift_weight: float = DRIFT_WEIGHT
+    clock: str = "glazing"
+    age: float = 0.0
+    name: str = "ewma"
+
+    def __post_init__(self):
+        _check_weight("weight", self.weight)
+        _check_weight("drift_weight", self.drift_weight)
+        if not math.isfinite(self.level):
+            raise ValueError(f"level must be a finite rate (m/s); got {self.level!r}")
+        if self.clock not in CLOCKS:
+            raise ValueError(f"clock must be one of {CLOCKS}; got {self.clock!r}")
+        for name in ("drift", "age"):
+            if not math.isfinite(getattr(self, name)):
+                raise ValueError(f"{name} must be finite; got {getattr(self, name)!r}")
+
+    def predict(self, age: float) -> float:
+        """The rate (m/s) of a wafer of pad ``age`` (eq. C4): the level carried forward by the drift."""
+        return self.level + self.drift * (age - self.age)
+
+    def update(self, rate: float, age: float) -> "DoubleEWMA":
+        """Eqs. C2 and C3 after a wafer of measured mean rate ``rate`` (m/s) and pad ``age``; a wafer
+        of the same age as the last (a pad in its in-situ balance) updates the level only."""
+        step = age - self.age
+        level = self.weight * rate + (1.0 - self.weight) * (self.level + self.drift * step)
+        drift = self.drift
+        if abs(step) > AGE_RESOLUTION * max(abs(age), 1.0):
+            drift = self.drift_weight * (level - self.level) / step + (1.0 - self.drift_weight) * self.drift
+        return replace(self, level=level, drift=drift, age=float(age))
+
+    def to_dict(self) -> dict:
+        return asdict(self)
 
 
-def feed_forward_time(state: ControllerState, incoming_mean: float, target: float) -> float:
-    """Polish time (s) that removes incoming_mean - target (m) at the estimated rate (m/s)."""
-    if not state.rate > 0:
-        raise ValueError(f"the estimated removal rate must be > 0 m/s; got {state.rate!r}")
-    return max(incoming_mean - target, 0.0) / state.rate
+#: The run-to-run estimators by name (``cmpsim lot --control``); "none" runs the recipe as written.
+ESTIMATORS = {"ewma": DoubleEWMA, "single_ewma": SingleEWMA}
+#: The names ``--control`` takes.
+CONTROL = ("none", *ESTIMATORS)
 
 
-def update_rate(state: ControllerState, removed_mean: float, time: float, weight: float) -> ControllerState:
-    """The EWMA update of the mean-rate estimate after a wafer that lost ``removed_mean`` (m) in ``time`` (s)."""
-    if not time > 0:
-        return state
-    return replace(state, rate=weight * removed_mean / time + (1.0 - weight) * state.rate)
+def make_estimator(name: str, rate: float, weight: float = WEIGHT, drift_weight: float = DRIFT_WEIGHT, clock: str = "glazing",
+                   age: float = 0.0, drift_prior: str = "model") -> RateEstimator:
+    """The estimator called ``name`` (:data:`ESTIMATORS`), seeded with the first ``rate`` (m/s) at pad
+    ``age`` on its ``clock`` (the double EWMA's) and the first drift of ``drift_prior`` (eq. C5:
+    "model", on the glazing clock, the rate proportional to the glazing factor, D_0 = a_0 / age; "none",
+    D_0 = 0; on the wafer clock the drift starts at 0 either way)."""
+    if name not in ESTIMATORS:
+        raise ValueError(f"control must be one of {CONTROL}; got {name!r}")
+    _check_weight("drift_weight", drift_weight)
+    if clock not in CLOCKS:
+        raise ValueError(f"clock must be one of {CLOCKS}; got {clock!r}")
+    if drift_prior not in DRIFT_PRIORS:
+        raise ValueError(f"drift_prior must be one of {DRIFT_PRIORS}; got {drift_prior!r}")
+    _check_rate(rate, "the first rate estimate")
+    if ESTIMATORS[name] is DoubleEWMA:
+        drift = float(rate) / float(age) if (drift_prior == "model" and clock == "glazing" and age > 0) else 0.0
+        return DoubleEWMA(level=float(rate), drift=drift, weight=weight, drift_weight=drift_weight, clock=clock, age=float(age))
+    return SingleEWMA(level=float(rate), weight=weight)
 
 
-def area_weights(radius) -> np.ndarray:
-    """Area weights of the profile's radii (trapezoidal rings r dr, summing to 1): the wafer-area mean."""
-    r = np.asarray(radius, dtype=float)
-    edges = np.concatenate(([r[0]], 0.5 * (r[1:] + r[:-1]), [r[-1]]))
-    w = r * np.diff(edges) if r.size > 1 else np.ones(1)
-    w = np.where(w > 0, w, 0.0) + (w.sum() == 0)
-    return w / w.sum()
+def estimator_from_dict(data: dict) -> RateEstimator:
+    """An estimator from its :meth:`to_dict` (a checkpoint)."""
+    data = dict(data)
+    name = data.get("name")
+    if name not in ESTIMATORS:
+        raise ValueError(f"the checkpoint's estimator {name!r} is not one of {tuple(ESTIMATORS)}")
+    return ESTIMATORS[name](**data)
 
 
-def zone_correction(
-    controller: EWMAController,
-    state: ControllerState,
-    weights,
-    final_thickness,
-    response,
-    polish_time: float,
-    zone_areas=None,
-) -> ControllerState:
-    """The zone pressures for the next wafer from the last wafer's remaining thickness (m at each radius).
-
-    ``weights`` are the radii's shares of the wafer area (e.g. the film stack's ring areas, or
-    :func:`area_weights` of the radii); they need not sum to 1.
-
-    ``response`` is d rate(r) / d P_k (m/s/Pa, radii x zones) at the current pressures; the shape
-    of the remaining thickness about its area mean is filtered (EWMA) and removed in
-    ``polish_time`` (s) by the bounded, regularised least-squares pressure change that keeps the
-    load (``zone_areas``, m^2, the weights of the zones' pressures in the load; equal by default).
-    """
-    final = np.asarray(final_thickness, dtype=float)
-    w = np.asarray(weights, dtype=float) / float(np.sum(weights))
-    error = final - np.sum(w * final)
-    filtered = error if state.profile_error is None else controller.zone_weight * error + (1.0 - controller.zone_weight) * state.profile_error
-    shape = np.asarray(response, dtype=float)
-    shape = shape - w @ shape  # what each zone does to the profile's shape (its mean is the time's job)
-    a = shape * polish_time * np.sqrt(w)[:, None]
-    b = filtered * np.sqrt(w)
-    gram = a.T @ a
-    n = gram.shape[0]
-    alpha = controller.regularisation * np.trace(gram) / max(n, 1)
-    # the load is kept: sum_k A_k dP_k = 0 (the zones' areas), so that the shape correction does not
-    # drift along the common mode the shape barely sees (the mean rate is the polish time's)
-    c = np.ones(n) if zone_areas is None else np.asarray(zone_areas, dtype=float)
-    kkt = np.block([[gram + alpha * np.eye(n), c[:, None]], [c[None, :], np.zeros((1, 1))]])
-    step = np.linalg.solve(kkt, np.concatenate([a.T @ b, [0.0]]))[:n]
-    lo, hi = controller.bounds
-    pressures = tuple(float(p) for p in np.clip(np.asarray(state.zone_pressures, dtype=float) + step, lo, hi))
-    return replace(state, zone_pressures=pressures, profile_error=filtered)
+def feed_forward_time(rate: float, incoming_mean: float, target: float) -> float:
+    """Polish time (s) that removes ``incoming_mean - target`` (m) at ``rate`` (m/s; eq. C0); 0 if already below the target."""
+    _check_rate(rate, "the predicted removal rate")
+    return max(incoming_mean - target, 0.0) / rate

@@ -234,7 +234,7 @@ class PolishResult:
 
     def to_dict(self) -> dict:
         """The JSON object of ``cmpsim polish --json`` (SI, units in ``units``)."""
-        return {
+        out = {
             "recipe": self.recipe.source,
             "films": [{"name": f.name, "material": f.material, "thickness": f.thickness} for f in self.recipe.films],
             "steps": [s.to_dict() for s in self.steps],
@@ -244,7 +244,12 @@ class PolishResult:
             "solves": self.solves,
             "wall_time": self.wall_time,
             "units": dict(UNITS),
-        } | (self.ride.to_dict() if self.ride is not None else {})
+        }
+        if self.ride is not None:  # the ride's keys and their units beside the recipe's
+            ride = self.ride.to_dict()
+            out["ride"] = ride["ride"]
+            out["units"] |= ride["units"]
+        return out
 
     def to_json(self) -> str:
         import json
@@ -274,10 +279,6 @@ def _built_column(key) -> ThermalColumn:
     """The thermal column of a (wafer radius, centre distance, slurry temperature, heat removal): built once
     (an eigen-decomposition, 0.1 s; the column is frozen), shared by every polish and idle of a lot."""
     return polisher_column(key[0], key[1], SLURRY_FLOW_RATE, platen=PLATEN, slurry_temperature=key[2], surface_coefficient=key[3])
-
-
-def _config_key(config: Config):
-    return tuple(sorted((k, repr(v)) for k, v in config.to_dict().items()))
 
 
 def idle(pad_state: PadState, seconds: float, config: Config) -> PadState:
@@ -359,7 +360,7 @@ def polish(recipe, *, overrides: dict | None = None, pad_state: PadState | None 
             wear = pad_life.at(step_cfg)
             worn = worn_overrides(step_cfg, life, wear.pad) if pad_life.worn_summits else {}
             cfg = step_cfg.replace(**worn) if worn else step_cfg
-        key = _config_key(cfg)
+        key = cfg.key()
         if key not in solves:
             solves[key] = StepSolve(cfg)
             solved += 1

@@ -17,11 +17,16 @@ EWMA's rate estimate. The pad they polished (warmed, worn, conditioned) is the p
 
 The incoming thickness of the top film varies from wafer to wafer
 (:func:`cmpsim.polisher.incoming.incoming_profiles`, reproducible with ``seed``), or is given.
-With ``control = "ewma"`` the run-to-run controller (:mod:`cmpsim.polisher.control`) sets each
-wafer's polish time of the recipe's last timed step from its estimated rate and the incoming
-thickness measured before the wafer (feed-forward), and, on a zoned membrane head, its zone
-pressures from the last wafer's post-polish profile through the head's zone response (feedback),
-computed once for the lot at its starting pressures.
+With ``control = "ewma"`` (the double EWMA) or ``"single_ewma"`` the run-to-run controller sets each
+wafer's polish time of the recipe's last timed step from the rate its estimator
+(:mod:`cmpsim.polisher.control`) predicts for the wafer's pad age and the incoming thickness
+measured before the wafer (feed-forward, eq. C0), and, on a zoned membrane head, its zone
+pressures through the head's zone response, computed once for the lot at its starting pressures,
+taking only steps predicted to lower the non-uniformity (:mod:`cmpsim.polisher.zones`).
+
+With ``checkpoint`` the lot's state is written atomically after its set-up and after every wafer
+(:mod:`cmpsim.polisher.checkpoint`); ``resume`` goes on from it with results identical to the
+uninterrupted lot. The lot always continues from the checkpoint's numbers, resumed or not.
 """
 
 from __future__ import annotations
@@ -34,22 +39,26 @@ import numpy as np
 
 from ..results.uniformity import weighted_std_over_mean
 from ..physics.padlife import ConditionerDisk, FreshPad, PadLifeState
-from .control import ControllerState, EWMAController, feed_forward_time, update_rate, zone_correction
+from .checkpoint import LotCheckpoint, digest, pad_state_from_dict, pad_state_to_dict, read_checkpoint, write_checkpoint
+from .control import CONTROL, DRIFT_WEIGHT, WEIGHT, estimator_from_dict, feed_forward_time, make_estimator
 from .engine import PadState, idle, polish
 from .incoming import incoming_profiles
-from .pad import PadLife
+from .pad import GlazingClock, PadLife, mean_factor
 from .recipe import RecipeError, load_recipe
+from .zones import ZoneFeedback, ZoneState
 
 __all__ = ["CONTROL", "WaferRecord", "LotResult", "run_lot", "lot_csv", "write_lot"]
 
-#: The run-to-run control of a lot.
-CONTROL = ("none", "ewma")
+#: Fixed-point iterations of a wafer's polish time and its pad age on the glazing clock (at most).
+AGE_ITERATIONS = 30
 
 UNITS = {
     "polish_time": "s", "removal_rate_mean": "m/s", "final_thickness_mean": "m", "final_thickness_nonuniformity": "1 (std over mean, wafer area)",
     "zone_pressures": "Pa", "incoming_mean": "m", "pad_temperature_end": "K", "rate_factor": "1 (glazed pad / fresh pad)",
     "summit_sigma": "1 (worn / fresh, at the wafer's start)", "target": "m", "idle_time": "s", "wall_time": "s",
-    "qualification.removal_rate_mean": "m/s", "qualification.polish_time": "s",
+    "qualification.removal_rate_mean": "m/s", "qualification.polish_time": "s", "predicted_rate": "m/s",
+    "predicted_nonuniformity": "1 (std over mean, wafer area, predicted by the zone feedback)",
+    "controller.weight": "1", "controller.drift_weight": "1", "controller.zone_weight": "1",
 }
 
 
@@ -71,6 +80,26 @@ class WaferRecord:
     summit_sigma: float
     radius: np.ndarray = field(repr=False)
     final_thickness: np.ndarray = field(repr=False)
+    #: m/s: the rate the controller predicted for the wafer (eq. C4 or C1, times Z6); None without control
+    predicted_rate: float | None = None
+    #: 1: the non-uniformity the zone feedback predicted at the wafer's pressures (eq. Z2); None without it
+    predicted_nonuniformity: float | None = None
+    #: the zone feedback's decision for the wafer (eq. Z4): "accepted", "halved N", "refused"; None without it
+    zone_step: str | None = None
+
+    def to_record(self) -> dict:
+        """Every field as JSON-able values (the checkpoint's record; floats round-trip exactly)."""
+        return self.to_dict() | {"radius": np.asarray(self.radius, dtype=float).tolist(),
+                                 "final_thickness": np.asarray(self.final_thickness, dtype=float).tolist()}
+
+    @classmethod
+    def from_dict(cls, data: dict) -> "WaferRecord":
+        """The inverse of :meth:`to_record`."""
+        d = dict(data)
+        d["zone_pressures"] = tuple(d["zone_pressures"])
+        d["radius"] = np.asarray(d["radius"], dtype=float)
+        d["final_thickness"] = np.asarray(d["final_thickness"], dtype=float)
+        return cls(**d)
 
     def to_dict(self) -> dict:
         return {
@@ -84,6 +113,9 @@ class WaferRecord:
             "pad_temperature_end": self.pad_temperature_end,
             "rate_factor": self.rate_factor,
             "summit_sigma": self.summit_sigma,
+            "predicted_rate": self.predicted_rate,
+            "predicted_nonuniformity": self.predicted_nonuniformity,
+            "zone_step": self.zone_step,
         }
 
 
@@ -102,6 +134,8 @@ class LotResult:
     solves: int
     wall_time: float
     qualification: dict | None = None
+    #: the controller's weights (lambda_1 ``weight``, lambda_2 ``drift_weight``, lambda_z ``zone_weight``) and whether the zone feedback ran; None without control
+    controller: dict | None = None
 
     def to_dict(self) -> dict:
         """The JSON object of ``cmpsim lot --json`` (SI, units in ``units``)."""
@@ -114,6 +148,7 @@ class LotResult:
             "idle_time": self.idle_time,
             "wafers": [w.to_dict() for w in self.wafers],
             "qualification": self.qualification,
+            "controller": self.controller,
             "solves": self.solves,
             "wall_time": self.wall_time,
             "units": dict(UNITS),
@@ -164,6 +199,21 @@ def _controlled_step(recipe) -> int:
     return timed[-1]
 
 
+def _inputs(recipe, wafers, conditioning, control, seed, overrides, incoming, idle_time, disk, pad, weight, drift_weight, zone_weight,
+            zone_feedback, time_step, qualification, worn_summits) -> dict:
+    """Every input that decides a lot's numbers, as JSON-able values (the checkpoint's ``inputs``)."""
+    given = None
+    if incoming is not None:
+        given = [digest(incoming[0]), digest(incoming[1])]
+    return {
+        "recipe": repr(recipe), "wafers": int(wafers), "conditioning": conditioning, "control": control, "seed": seed,
+        "overrides": repr(sorted((k, repr(v)) for k, v in (overrides or {}).items())), "incoming": given, "idle_time": float(idle_time),
+        "disk": repr(disk), "pad": repr(pad), "weight": float(weight), "drift_weight": float(drift_weight), "zone_weight": float(zone_weight),
+        "zone_feedback": bool(zone_feedback), "time_step": float(time_step), "qualification": int(qualification),
+        "worn_summits": bool(worn_summits),
+    }
+
+
 def run_lot(
     recipe,
     wafers: int = 25,
@@ -176,11 +226,18 @@ def run_lot(
     idle_time: float = 30.0,
     disk: ConditionerDisk | None = None,
     pad: FreshPad | None = None,
-    weight: float = 0.3,
+    weight: float = WEIGHT,
+    drift_weight: float = DRIFT_WEIGHT,
     zone_weight: float = 0.5,
+    zone_feedback: bool = True,
+    clock: str = "glazing",
+    drift_prior: str = "model",
     time_step: float = 1.0,
     qualification: int = 1,
     worn_summits: bool = False,
+    checkpoint=None,
+    resume: bool = False,
+    after_wafer=None,
     pad_constants: dict | None = None,
     cache: dict | None = None,
 ) -> LotResult:
@@ -189,16 +246,18 @@ def run_lot(
     Parameters
     ----------
     recipe : Recipe, path or TOML text
-        The recipe (:mod:`cmpsim.polisher.recipe`); with ``control = "ewma"`` it needs a
-        ``[target] remaining`` and a timed step.
+        The recipe (:mod:`cmpsim.polisher.recipe`); with control it needs a ``[target] remaining``
+        and a timed step.
     wafers : int
         Number of wafers, >= 1.
     conditioning : "none" | "ex_situ" | "in_situ", optional
         The conditioning disk: never, between wafers (for ``idle_time``), or while polishing; default
         the recipe's ``conditioning``, else "in_situ".
-    control : "none" | "ewma"
-        Without control every wafer runs the recipe as written; with EWMA the controller sets each
-        wafer's polish time and zone pressures.
+    control : "none" | "ewma" | "single_ewma"
+        Without control every wafer runs the recipe as written; otherwise the rate estimator of that
+        name (:data:`cmpsim.polisher.control.ESTIMATORS`: "ewma" the double EWMA, eqs. C2-C4; "single_ewma"
+        issue 32's, eq. C1) sets each wafer's polish time (eq. C0) and, on a zoned head with
+        ``zone_feedback``, the zone feedback (:mod:`cmpsim.polisher.zones`) its zone pressures.
     seed : int, optional
         Seed of the incoming thickness draw (reproducible lots).
     overrides : dict, optional
@@ -210,8 +269,14 @@ def run_lot(
     disk, pad : optional
         The conditioning disk (default the recipe's ``[conditioner]``, else the calibrated disk) and the
         fresh pad (default each step's own, :func:`cmpsim.polisher.pad.fresh_pad`).
-    weight, zone_weight : float
-        The EWMA weights of the rate and of the profile.
+    weight, drift_weight, zone_weight : float
+        The EWMA weights in (0, 1]: lambda_1 of the rate's level (C1/C2), lambda_2 of its drift (C3)
+        and lambda_z of the profile's shape (Z5).
+    clock : "glazing" | "wafer"
+        The double EWMA's pad-age clock (:data:`cmpsim.polisher.control.CLOCKS`): the drift per unit of
+        the pad-life model's rate factor over the wafer (eq. L4), or per wafer.
+    zone_feedback : bool
+        With control on a zoned head, the zone feedback sets the zone pressures (else they stay the recipe's).
     time_step : float
         The recipes' time step, s.
     qualification : int
@@ -228,6 +293,14 @@ def run_lot(
     cache : dict, optional
         The step solves of earlier lots of the same recipe and inputs, reused (a calibration runs
         the lot many times with other glazing constants, which do not change a wafer's solve).
+    checkpoint : path, optional
+        A file the lot's state is written to, atomically, after its set-up and after every wafer
+        (:mod:`cmpsim.polisher.checkpoint`).
+    resume : bool
+        Go on from ``checkpoint`` if it exists (refused, naming them, if its inputs differ); the
+        result is identical to the lot run without interruption.
+    after_wafer : callable, optional
+        Called with the wafer's :class:`WaferRecord` after each wafer (and its checkpoint).
     """
     t0 = _time.perf_counter()
     recipe = load_recipe(recipe)
@@ -244,21 +317,157 @@ def run_lot(
         raise ValueError(f"idle_time must be >= 0 s; got {idle_time!r}")
     if not (isinstance(qualification, (int, np.integer)) and qualification >= 0):
         raise ValueError(f"qualification must be a whole number of monitor wafers >= 0; got {qualification!r}")
+    make_estimator("ewma", 1.0, weight, drift_weight, clock, 1.0, drift_prior)  # the weights and the clock checked before any solve
+    if not 0 < zone_weight <= 1:
+        raise ValueError(f"zone_weight (the EWMA weight of the profile) must be in (0, 1]; got {zone_weight!r}")
+    if resume and checkpoint is None:
+        raise ValueError("resume needs the checkpoint to resume from (cmpsim lot --resume needs --out DIR)")
     target = recipe.target.remaining
-    if control == "ewma" and target is None:
-        raise RecipeError(f"{recipe.source}: control 'ewma' needs the recipe's [target] remaining thickness")
+    controlled = control != "none"
+    if controlled and target is None:
+        raise RecipeError(f"{recipe.source}: control {control!r} needs the recipe's [target] remaining thickness")
     overrides = dict(overrides or {})
-    step_k = _controlled_step(recipe) if control == "ewma" else None
+    step_k = _controlled_step(recipe) if controlled else None
     base = recipe.step_config(recipe.steps[step_k if step_k is not None else 0], overrides)
+    inputs = _inputs(recipe, wafers, conditioning, control, seed, overrides, incoming, idle_time, disk, pad, weight, drift_weight,
+                     zone_weight, zone_feedback, time_step, qualification, worn_summits) | {"clock": clock, "drift_prior": drift_prior}
+    if pad_constants:  # a calibrated pad life decides the numbers too (absent otherwise: earlier checkpoints still resume)
+        inputs["pad_constants"] = repr(sorted((k, float(v)) for k, v in pad_constants.items()))
 
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
         cooled = idle(result.pad_state, idle_time, base)
         return PadState(cooled.thermal, life_model.idle(result.pad_state.life, idle_time), cooled.time)
 
-    # the wafer's radii and the controller's first rate: the monitor wafers on the lot's pad (or the
-    # model's rate on a fresh pad), polished with the recipe as written at the nominal films
-    pad_state = PadState(life=PadLifeState())
     cache = {} if cache is None else cache  # the step solves of the last wafer: a wafer with the same inputs is not solved again
+    saved = read_checkpoint(checkpoint, inputs) if resume else None
+    if saved is None:
+        setup, pad_state, estimator, zones, feedback, solves = _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base,
+                                                                          time_step, qualification, life_model, between_wafers, cache,
+                                                                          weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior)
+        saved = LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones), [], solves)
+        if checkpoint is not None:
+            write_checkpoint(checkpoint, saved)
+    # the lot always goes on from the checkpoint's numbers, resumed or not, so that both run the same
+    # arithmetic on the same arrays (a matrix product's last bit can depend on its operands' layout)
+    setup, start, solves = saved.setup, saved.next_wafer, saved.solves
+    pad_state, estimator, zones = _restore(saved)
+    feedback = None if setup["feedback"] is None else _feedback_from_dict(setup["feedback"])
+    records = [WaferRecord.from_dict(r) for r in saved.records]
+
+    radius = np.asarray(setup["radius"], dtype=float)
+    weights = np.asarray(setup["weights"], dtype=float)
+    profiles = np.asarray(setup["profiles"], dtype=float)
+    others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
+    start_pressures = tuple(setup["start_pressures"])
+
+    for k in range(start, wafers):
+        inc = profiles[k]
+        inc_mean = float(np.sum(weights * inc))
+        wafer_recipe, ov = recipe, dict(overrides)
+        plan, predicted = None, None
+        if controlled:
+            pressures = start_pressures
+            if feedback is not None:
+                plan = feedback.plan(zones, inc, float(target))
+                pressures = plan.pressures
+                ov["zone_pressures"] = pressures
+            factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
+            predicted, t, wafer_recipe = _next_wafer(recipe, step_k, ov, estimator, factor, inc_mean, float(target), k + 1, pad_state.life,
+                                                     life_model, time_step)
+        result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
+                        pad_life=life_model, cache=cache)
+        solves += result.solves
+        total_time = sum(s.duration for s in result.steps)
+        final = np.asarray(result.final.thickness[0], dtype=float)
+        removed = inc_mean - float(np.sum(weights * final))
+        pressures = tuple(ov.get("zone_pressures", start_pressures))
+        record = WaferRecord(
+            index=k + 1,
+            polish_time=float(total_time),
+            removal_rate_mean=float(sum(s.removed_volume for s in result.steps) / result.final.wafer_area / total_time) if total_time > 0 else 0.0,
+            final_thickness_mean=float(np.sum(weights * final)),
+            final_thickness_nonuniformity=weighted_std_over_mean(final, weights),
+            zone_pressures=tuple(float(p) for p in pressures),
+            incoming_mean=inc_mean,
+            pad_temperature_end=result.pad_state.surface_temperature,
+            rate_factor=_mean_factor(result),
+            summit_sigma=float(result.steps[0].glazing["summit_sigma"]),
+            radius=radius,
+            final_thickness=final,
+            predicted_rate=predicted,
+            predicted_nonuniformity=None if plan is None else plan.nu_after,
+            zone_step=None if plan is None else plan.decision,
+        )
+        records.append(record)
+        pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
+        if controlled and total_time > 0:
+            factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
+            age = record.rate_factor if estimator.clock == "glazing" else float(k + 1)
+            estimator = estimator.update(removed / total_time / factor, age)
+            if feedback is not None:
+                zones = feedback.learn(zones, pressures, (inc - final) / total_time)
+        saved = LotCheckpoint(inputs, k + 1, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones),
+                              [r.to_record() for r in records], solves)
+        if checkpoint is not None:
+            write_checkpoint(checkpoint, saved)
+        pad_state, estimator, zones = _restore(saved)
+        if after_wafer is not None:
+            after_wafer(record)
+    return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves,
+                     _time.perf_counter() - t0, setup["qualification"],
+                     {"weight": float(weight), "drift_weight": float(drift_weight), "zone_weight": float(zone_weight), "clock": clock,
+                      "estimator": estimator.name, "zone_feedback": bool(feedback is not None)} if controlled else None)
+
+
+def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, index, life, life_model, time_step):
+    """The controlled wafer: its predicted rate (m/s; eq. C4 at its pad age, times Z6), polish time
+    (s; eq. C0) and recipe. On the glazing clock the wafer's age depends on its own polish time:
+    the fixed point t = (incoming - target) / (rate at the age of a wafer of t), iterated to 1e-9 s."""
+    steps = list(recipe.steps)
+
+    def with_time(t):
+        steps[step_k] = replace(steps[step_k], time=t)
+        return replace(recipe, steps=tuple(steps))
+
+    if estimator.clock != "glazing":
+        predicted = estimator.predict(float(index)) * factor
+        t = max(feed_forward_time(predicted, inc_mean, target), time_step)
+        return predicted, t, with_time(t)
+    configs = [recipe.step_config(s, overrides) for s in recipe.steps]
+    if len(configs) == 1:  # the pad's states along the step computed once for all trial times
+        clock = GlazingClock(life_model, configs[0], life, time_step)
+    else:
+        def clock(t):
+            return mean_factor(life_model, list(zip(configs, [t if j == step_k else s.limit for j, s in enumerate(recipe.steps)])), life,
+                               time_step)
+    t = max(feed_forward_time(estimator.predict(estimator.age) * factor, inc_mean, target), time_step)
+    for _ in range(AGE_ITERATIONS):
+        age = clock(t)
+        predicted = estimator.predict(age) * factor
+        new = max(feed_forward_time(predicted, inc_mean, target), time_step)
+        done = abs(new - t) <= 1e-9
+        t = new
+        if done:
+            break
+    return predicted, t, with_time(t)
+
+
+def _restore(saved: LotCheckpoint):
+    """The pad, the rate estimator and the zone state of a checkpoint."""
+    estimator = None if saved.estimator is None else estimator_from_dict(saved.estimator)
+    zones = None if saved.zones is None else ZoneState.from_dict(saved.zones)
+    return pad_state_from_dict(saved.pad_state), estimator, zones
+
+
+def _dict(state):
+    return None if state is None else state.to_dict()
+
+
+def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers,
+            cache, weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior):
+    """The lot before its first wafer: the monitor wafers (or the fresh pad's prediction), the rings,
+    the incoming profiles, the first rate estimate, the zone response and the first shape."""
+    pad_state = PadState(life=PadLifeState())
     if qualification:
         solves = 0
         for _ in range(qualification):
@@ -285,70 +494,45 @@ def run_lot(
         if given_t.shape[0] < wafers:
             raise ValueError(f"incoming holds {given_t.shape[0]} profiles for {wafers} wafers")
         profiles = np.array([np.interp(radius, np.asarray(given_r, dtype=float), t) for t in given_t[:wafers]])
-    others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
 
     zoned = len(base.zone_radii) > 0
     edges = np.concatenate(([0.0], np.asarray(base.zone_radii, dtype=float)))
-    zone_areas = np.pi * np.diff(edges**2)  # m^2: the zones' shares of the load
     start_pressures = tuple(base.zone_pressures) if base.zone_pressures else ((base.applied_pressure,) * len(base.zone_radii) if zoned else ())
-    response = None
-    state = None
-    controller = None
-    if control == "ewma":
-        controller = EWMAController(target=float(target), weight=weight, zone_weight=zone_weight)
-        state = ControllerState(rate=first_removed / first_time, zone_pressures=start_pressures)
-        if zoned:
+    estimator = feedback = zones = None
+    if controlled:
+        age = (_mean_factor(first) if qualification else 1.0) if clock == "glazing" else 0.0  # the monitor wafer's age (a fresh pad: 1)
+        estimator = make_estimator(control, first_removed / first_time, weight, drift_weight, clock, age, drift_prior)
+        if zoned and zone_feedback:
             from ..head.zone_response import ZoneSolver, profile_of, response_matrix
 
             run = ZoneSolver(base)
             r0 = run(start_pressures)
             run.adopt(r0)
+            rate0 = np.interp(radius, profile_of(r0)["radius"], profile_of(r0)["rate"])
             response = response_matrix(run, start_pressures, profile_of(r0)["rate"])
+            response = np.array([np.interp(radius, profile_of(r0)["radius"], column) for column in np.asarray(response).T]).T
             solves += run.solves
+            feedback = ZoneFeedback(response=response, start_pressures=tuple(float(p) for p in start_pressures),
+                                    mean_rate=float(weights @ rate0), weights=weights, zone_areas=np.pi * np.diff(edges**2),
+                                    zone_weight=zone_weight)
+            measured = (np.asarray(first.initial.thickness[0], dtype=float) - np.asarray(first.final.thickness[0], dtype=float)) / first_time
+            zones = ZoneState(feedback.start_pressures, measured / float(weights @ measured))  # the first shape: the monitor wafer's
+    setup = {"radius": radius.tolist(), "weights": weights.tolist(), "profiles": profiles.tolist(), "qualification": qualified,
+             "start_pressures": [float(p) for p in start_pressures], "feedback": None if feedback is None else _feedback_to_dict(feedback)}
+    return setup, pad_state, estimator, zones, feedback, solves
 
-    records = []
-    for k in range(wafers):
-        inc = profiles[k]
-        inc_mean = float(np.sum(weights * inc))
-        wafer_recipe, ov = recipe, dict(overrides)
-        if controller is not None:
-            t = max(feed_forward_time(state, inc_mean, controller.target), time_step)
-            steps = list(recipe.steps)
-            steps[step_k] = replace(steps[step_k], time=t)
-            wafer_recipe = replace(recipe, steps=tuple(steps))
-            if zoned:
-                ov["zone_pressures"] = state.zone_pressures
-        result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
-                        pad_life=life_model, cache=cache)
-        solves += result.solves
-        total_time = sum(s.duration for s in result.steps)
-        final = np.asarray(result.final.thickness[0], dtype=float)
-        removed = inc_mean - float(np.sum(weights * final))
-        pressures = tuple(ov.get("zone_pressures", start_pressures))
-        records.append(
-            WaferRecord(
-                index=k + 1,
-                polish_time=float(total_time),
-                removal_rate_mean=float(sum(s.removed_volume for s in result.steps) / result.final.wafer_area / total_time) if total_time > 0 else 0.0,
-                final_thickness_mean=float(np.sum(weights * final)),
-                final_thickness_nonuniformity=weighted_std_over_mean(final, weights),
-                zone_pressures=tuple(float(p) for p in pressures),
-                incoming_mean=inc_mean,
-                pad_temperature_end=result.pad_state.surface_temperature,
-                rate_factor=_mean_factor(result),
-                summit_sigma=float(result.steps[0].glazing["summit_sigma"]),
-                radius=radius,
-                final_thickness=final,
-            )
-        )
-        pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
-        if controller is not None:
-            controlled_time = wafer_recipe.steps[step_k].time
-            state = update_rate(state, removed, total_time, controller.weight)
-            if zoned:
-                state = zone_correction(controller, state, weights, final, response, controlled_time, zone_areas)
-    return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves,
-                     _time.perf_counter() - t0, qualified)
+
+def _feedback_to_dict(f: ZoneFeedback) -> dict:
+    return {"response": np.asarray(f.response).tolist(), "start_pressures": list(f.start_pressures), "mean_rate": f.mean_rate,
+            "weights": np.asarray(f.weights).tolist(), "zone_areas": np.asarray(f.zone_areas).tolist(), "zone_weight": f.zone_weight,
+            "bounds": list(f.bounds), "regularisation": f.regularisation, "halvings": f.halvings}
+
+
+def _feedback_from_dict(d: dict) -> ZoneFeedback:
+    return ZoneFeedback(response=np.asarray(d["response"], dtype=float), start_pressures=tuple(d["start_pressures"]),
+                        mean_rate=float(d["mean_rate"]), weights=np.asarray(d["weights"], dtype=float),
+                        zone_areas=np.asarray(d["zone_areas"], dtype=float), zone_weight=float(d["zone_weight"]), bounds=tuple(d["bounds"]),
+                        regularisation=float(d["regularisation"]), halvings=int(d["halvings"]))
 
 
 def _mean_factor(result) -> float:

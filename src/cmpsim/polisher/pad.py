@@ -146,3 +146,56 @@ class StepWear:
     def factor(self, state: PadLifeState) -> float:
         """The glazed pad's rate factor RR/RR_fresh (eq. L4), dimensionless."""
         return float(np.asarray(self.summits(state).rate_factor))
+
+
+def mean_factor(pad_life: PadLife, steps, life: PadLifeState, time_step: float) -> float:
+    """The glazed pad's rate factor (eq. L4) averaged over a wafer's polish time, 1: the trapezoid over
+    the factors at the time steps' ends, as the recipe engine records them (``StepResult.glazing``),
+    for ``steps`` [(config, duration s), ...] polished from the pad-life state ``life`` (the lot's
+    controller asks it of a wafer before polishing it: its pad-age clock, docs/polisher.md)."""
+    times, factors, clock = [], [], 0.0
+    for config, duration in steps:
+        wear = pad_life.at(config)
+        times.append(clock)
+        factors.append(wear.factor(life))
+        elapsed = 0.0
+        while elapsed < duration * (1 - 1e-12):
+            dt = min(time_step, duration - elapsed)
+            life = wear.advance(life, dt)
+            elapsed += dt
+            clock += dt
+            times.append(clock)
+            factors.append(wear.factor(life))
+    t, f = np.asarray(times), np.asarray(factors)
+    span = t[-1] - t[0]
+    return float(np.trapezoid(f, t) / span) if span > 0 else float(f[0])
+
+
+class GlazingClock:
+    """:func:`mean_factor` of a one-step wafer as a function of its polish time t (s), for a lot's
+    controller that looks for the t whose pad age it predicts the rate of: the pad-life states at the
+    whole time steps are computed once, lazily, so that each t costs one partial step."""
+
+    def __init__(self, pad_life: PadLife, config: Config, life: PadLifeState, time_step: float):
+        self.wear, self.time_step = pad_life.at(config), float(time_step)
+        self.states = [life]
+        self.factors = [self.wear.factor(life)]
+        self.integral = [0.0]  # trapezoid of the factor from 0 to k time steps, s
+
+    def __call__(self, t: float) -> float:
+        """The time-mean rate factor (1) over a wafer of ``t`` s (the engine's time steps: whole ones, then the rest)."""
+        if not t > 0:
+            return self.factors[0]
+        whole = int(t / self.time_step * (1 + 1e-12))
+        while len(self.states) <= whole:
+            state = self.wear.advance(self.states[-1], self.time_step)
+            factor = self.wear.factor(state)
+            self.integral.append(self.integral[-1] + 0.5 * self.time_step * (self.factors[-1] + factor))
+            self.states.append(state)
+            self.factors.append(factor)
+        rest = t - whole * self.time_step
+        total = self.integral[whole]
+        if rest > 1e-12 * t:
+            end = self.wear.factor(self.wear.advance(self.states[whole], rest))
+            total += 0.5 * rest * (self.factors[whole] + end)
+        return total / t

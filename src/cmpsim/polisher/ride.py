@@ -175,9 +175,8 @@ class Ride:
     def model(self, config):
         """The :class:`~cmpsim.die.chip.DieModel` of a step's config (one per distinct config; its rate is set per site)."""
         from ..die.chip import DieModel
-        from .engine import _config_key
 
-        key = _config_key(config)
+        key = config.key()
         if key not in self._models:
             r = self.riding
             self._models[key] = DieModel(config, self.process, blanket_rate=1.0, planarization_length=r.planarization_length,
@@ -203,9 +202,7 @@ class Ride:
         return out
 
     def to_dict(self) -> dict:
-        """The top-level ``ride`` object and units of ``cmpsim polish --die --json``."""
-        from .engine import UNITS
-
+        """The top-level ``ride`` object of ``cmpsim polish --die --json`` and the units of its keys (the recipe's own units are the engine's)."""
         lay = self.layout
         die = self.dies[0] if self.dies else None
         ride = {"layout": lay.name, "process": self.process.kind, "sites": [float(r) for r in self.radii], "window": lay.cell_size,
@@ -214,4 +211,4 @@ class Ride:
                 "planarization_length": die.planarization_length if die is not None else None}
         if lay.windowed:
             ride["layers"] = [f"{a}/{b}" for a, b in lay.layers]
-        return {"ride": ride, "units": dict(UNITS) | DIE_UNITS}
+        return {"ride": ride, "units": dict(DIE_UNITS)}

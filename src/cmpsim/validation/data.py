@@ -256,25 +256,12 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import read_text
+    from ..io import comments_and_rows, read_text
 
     path = Path(path)
     if text is None:
         text = read_text(path, "data file", DataError)
-    meta: dict[str, str] = {}
-    body_lines: list[tuple[int, str]] = []
-    for i, line in enumerate(text.splitlines(), start=1):
-        s = line.strip()
-        if s.startswith("#"):
-            content = s.lstrip("#").strip()
-            if ":" in content:
-                key, value = content.split(":", 1)
-                key = key.strip().lower()
-                if key and " " not in key:
-                    meta[key] = (meta[key] + " " + value.strip()) if key in meta else value.strip()
-            continue
-        if s:
-            body_lines.append((i, line))
+    meta, body_lines = comments_and_rows(text)
     if not body_lines:
         raise DataError(f"{path}: no header row and no data rows (see cmpsim/data/README.md for the format)")
     header_line, header_text = body_lines[0]
