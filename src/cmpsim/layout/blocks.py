@@ -108,8 +108,11 @@ def border_segments(region: kdb.Region, box: kdb.Box) -> Segments:
     if region.is_empty() or box.empty():
         return Segments.empty()
     frame = kdb.Region(box) - kdb.Region(box.enlarged(-1, -1)) if box.width() > 2 and box.height() > 2 else kdb.Region(box)
-    edges = region.edges().interacting(frame)
-    seg = edges_to_segments(edges)
+    return on_box(edges_to_segments(region.edges().interacting(frame)), box)
+
+
+def on_box(seg: Segments, box: kdb.Box) -> Segments:
+    """The segments that lie on an edge of ``box``."""
     if len(seg) == 0:
         return seg
     a, b = seg.a, seg.b
@@ -145,6 +148,10 @@ class Block:
         return self._segments
 
     def border(self) -> Segments:
+        """The outline pieces on the block's bounding box (from the outline when it was read out, else from KLayout)."""
         if self._border is None:
-            self._border = border_segments(self.region, self.box)
+            if self._segments is not None:
+                self._border = on_box(self._segments, self.box)
+            else:
+                self._border = border_segments(self.region, self.box)
         return self._border
