@@ -91,7 +91,13 @@ def grid_rasters(region: kdb.Region, origin: tuple[int, int], window: int, nx: i
     o = kdb.Point(int(origin[0]), int(origin[1]))
     step = kdb.Vector(int(window), int(window))
     area = np.asarray(region.rasterize(o, step, nx, ny), dtype=float)
-    ortho, oblique = _ortho_and_oblique(region.edges())
+    # the rectilinear polygons' edges are all axis-parallel; only the others need their edges sorted (cheap filter first)
+    rect, other = region.rectilinear(), region.non_rectilinear()
+    if other.is_empty():
+        ortho, oblique = rect.edges(), kdb.Edges()
+    else:
+        ortho, oblique = _ortho_and_oblique(other.edges())
+        ortho += rect.edges()
     strips = ortho.extended(0, 0, 1, 1, False)
     length = 0.5 * np.asarray(strips.rasterize(o, step, nx, ny), dtype=float)
     if not oblique.is_empty():

@@ -294,6 +294,8 @@ def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: Windo
         placed = [placed_boxes(b, *the_plan.placements[k]) for k, b in boxes.items()]
         zones = overlap_zones(np.concatenate(placed)) if placed else np.zeros((0, 4), dtype=np.int64)
         mask = _zone_mask(zones, grid) if zones is not None else None
+        seams = overlap_zones(np.concatenate(placed), touching=True) if placed else np.zeros((0, 4), dtype=np.int64)
+        need_seams = seams is None or len(seams) > 0  # None: too many pairs to tell; look at every border
     if not the_plan.composed or mask is None or mask.mean() > FLAT_FRACTION:
         stats["flat"] = True
         canvas = _flat(top, layer_indexes, grid, _new_store(threads), progress)
@@ -314,11 +316,13 @@ def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: Windo
                 _single_offset(block, m, t, grid, canvas)
             else:
                 _many_offsets(block, m, t, grid, canvas)
-        block.border()  # read before the region and its store are let go
+        if need_seams:
+            block.border()  # read before the region is let go (cheap from the outline when it was read)
         block.release()
         if progress:
             progress("merge", n + 1, len(boxes))
-    _seams(blocks, the_plan.placements, grid, canvas)
+    if need_seams:
+        _seams(blocks, the_plan.placements, grid, canvas)
     blocks.clear()
     stats["zone_windows"] = int(mask.sum())
     if mask.any():

@@ -210,11 +210,13 @@ def placed_boxes(box: tuple[int, int, int, int], m: np.ndarray, t: np.ndarray) -
     return np.stack([xs.min(axis=1), ys.min(axis=1), xs.max(axis=1), ys.max(axis=1)], axis=1)
 
 
-def overlap_zones(boxes: np.ndarray) -> np.ndarray | None:
+def overlap_zones(boxes: np.ndarray, touching: bool = False) -> np.ndarray | None:
     """(k, 4) intersections with positive area of every pair of boxes (closed boxes, dbu).
 
-    A sweep along x; None when the candidate pairs exceed :data:`MAX_PAIRS` (the caller then
-    merges the cell flat instead of composing it).
+    Boxes are paired through buckets of the median box size (larger boxes with every box); None
+    when the candidate pairs exceed :data:`MAX_PAIRS` (the caller then merges the cell flat
+    instead of composing it). ``touching``: the intersections that are a segment instead (boxes
+    that only touch along a line: the seams).
     """
     n = len(boxes)
     if n < 2:
@@ -263,4 +265,6 @@ def overlap_zones(boxes: np.ndarray) -> np.ndarray | None:
     z = np.stack([np.maximum(boxes[i, 0], boxes[j, 0]), np.maximum(boxes[i, 1], boxes[j, 1]),
                   np.minimum(boxes[i, 2], boxes[j, 2]), np.minimum(boxes[i, 3], boxes[j, 3])], axis=1)
     keep = (z[:, 2] > z[:, 0]) & (z[:, 3] > z[:, 1])
+    if touching:  # boxes that only touch along a line: the seams
+        keep = ((z[:, 2] == z[:, 0]) & (z[:, 3] > z[:, 1])) | ((z[:, 3] == z[:, 1]) & (z[:, 2] > z[:, 0]))
     return z[keep]
