@@ -499,10 +499,11 @@ def _polish(layout, process, config, blanket_rate, time, eff, fc, incoming, temp
     from dataclasses import replace
 
     ev = DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc, incoming)
+    start = ev.copy()  # the conditioned start (the pad's bulge into every gap is computed once)
     t_end = _end_point(ev)  # also gives every cell's event times, reached or not by `time`
     if time is None:
         time = t_end * (1.0 + process.over_polish)
-    ev = _at(ev, float(time), lambda: DieEvolution(layout, process, eff, blanket_rate, config.asperity_radius, fc, incoming))
+    ev = _at(ev, float(time), start.copy)
     return replace(template, time=float(time), evolution=ev)
 
 
