@@ -105,3 +105,17 @@ def separability(J: np.ndarray, names: list[str], correlation: np.ndarray | None
         if norms[k] == 0:
             msgs.append(f"{n} is not identifiable: the data do not change with it")
     return msgs, sv
+
+
+def choose_records(names: list[str], whys: list[str], jacobian, records, config, max_free: int | None = None,
+                   label: str = "these records") -> Choice:
+    """The candidates ``names`` (with their reasons ``whys``) that ``records`` choose: kept while the
+    Jacobian at the start, ``jacobian(records, names, config)``, separates them, with one degree of
+    freedom left unless every record carries its uncertainty (then absolute: no point is needed for
+    the error estimate)."""
+    if not names:
+        return Choice(notes=[f"{label}: these records choose no input"])
+    J = jacobian(records, names, config)
+    if max_free is None:
+        max_free = len(records) if all(r.uncertainty is not None for r in records) else max(len(records) - 1, 1)
+    return choose(J, names, whys, max_free)

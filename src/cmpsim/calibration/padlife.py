@@ -25,38 +25,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..physics.padlife import GLAZING_CONSTANTS, check_constants, default_constants
 from .scalefit import ScaleFit, log_intervals
 
 __all__ = ["GLAZING_CONSTANTS", "LotSetting", "PadLifeCalibration", "default_constants", "check_constants", "predict_lot",
            "choose_free", "start_jacobian", "calibrate_padlife", "padlife_constants"]
-
-#: The pad life's calibratable constants: name -> (unit, (low, high) valid range, what it is).
-GLAZING_CONSTANTS: dict[str, tuple[str, tuple[float, float], str]] = {
-    "pad_wear_coefficient": ("1/Pa", (1e-19, 1e-9), "Archard wear of the summit caps k_w (eq. L2)"),
-    "critical_glazed_area": ("1", (1e-9, 1.0), "glazed area G_c at which the rate is halved (eq. L4)"),
-    "conditioner_rate_constant": ("1/(N s)", (1e-7, 100.0), "the disk's renewal constant k_c, r_c = k_c F_d s_d (eq. L2)"),
-}
-
-
-def default_constants() -> dict[str, float]:
-    """The uncalibrated constants (SI): those calibrated to Jeong et al. (2024) (:data:`cmpsim.physics.padlife.CALIBRATION`)."""
-    from ..physics.padlife import CALIBRATION
-
-    return {"pad_wear_coefficient": float(CALIBRATION["wear_coefficient"]), "critical_glazed_area": float(CALIBRATION["critical_glazed_area"]),
-            "conditioner_rate_constant": float(CALIBRATION["conditioner_rate_constant"])}
-
-
-def check_constants(constants: dict, where: str = "pad life constants") -> dict:
-    """``constants`` checked: known names, numbers inside their valid range (ValueError naming the one that is not)."""
-    out = {}
-    for n, v in (constants or {}).items():
-        if n not in GLAZING_CONSTANTS:
-            raise ValueError(f"{where}: {n} is not a pad life constant; valid: {', '.join(GLAZING_CONSTANTS)}")
-        lo, hi = GLAZING_CONSTANTS[n][1]
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (lo <= float(v) <= hi):
-            raise ValueError(f"{where}: {n} = {v!r} must be a number in [{lo:g}, {hi:g}] {GLAZING_CONSTANTS[n][0]}")
-        out[n] = float(v)
-    return out
 
 
 @dataclass
@@ -210,12 +183,12 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
     s0 = default_constants()
     left: list = []
     if free is None:
-        from .registry import PAD_LIFE, choose_for
+        from .identify import choose_records
 
         names, reasons = choose_free(records, setting)
         if not names:
             raise ValueError("the lot rows identify no pad life constant: they need two wafers or more")
-        choice = choose_for(PAD_LIFE, records, setting)
+        choice = choose_records(names, [reasons[n] for n in names], start_jacobian, records, setting, label="pad life")
         free, left = choice.names, choice.left
         reasons = dict(choice.chosen)
         choice_names, choice_whys = names, choose_free(records, setting)[1]

@@ -145,18 +145,10 @@ def kind_of(quantity: str, scale: str | None = None) -> QuantityKind | None:
 def choose_for(kind: QuantityKind, records, config: Config, max_free: int | None = None):
     """The inputs ``records`` of a die or pad ``kind`` choose: its candidates, kept while the Jacobian at
     the start separates them, with one degree of freedom left (:class:`cmpsim.calibration.identify.Choice`)."""
-    from .identify import choose
+    from .identify import choose_records
 
     cands = kind.candidates(records, config)
-    names = [c.name for c in cands]
-    if not names:
-        from .identify import Choice
-
-        return Choice(notes=[f"{kind.name}: these records choose no input"])
-    J = kind.jacobian(records, names, config)
-    if max_free is None:  # uncertainties on every record: absolute, no point is needed for the error estimate
-        max_free = len(records) if all(r.uncertainty is not None for r in records) else max(len(records) - 1, 1)
-    return choose(J, names, [c.why for c in cands], max_free)
+    return choose_records([c.name for c in cands], [c.why for c in cands], kind.jacobian, records, config, max_free, kind.name)
 
 
 def candidates(datasets, config: Config) -> tuple[list[Candidate], list[str]]:

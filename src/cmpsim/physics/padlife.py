@@ -48,6 +48,9 @@ import numpy as np
 from scipy.special import ndtr
 
 __all__ = [
+    "GLAZING_CONSTANTS",
+    "default_constants",
+    "check_constants",
     "CONDITIONING",
     "FreshPad",
     "ConditionerDisk",
@@ -383,3 +386,30 @@ def _calibrate() -> None:
 
 
 _calibrate()
+
+
+#: The pad life's calibratable constants: name -> (unit, (low, high) valid range, what it is).
+GLAZING_CONSTANTS: dict[str, tuple[str, tuple[float, float], str]] = {
+    "pad_wear_coefficient": ("1/Pa", (1e-19, 1e-9), "Archard wear of the summit caps k_w (eq. L2)"),
+    "critical_glazed_area": ("1", (1e-9, 1.0), "glazed area G_c at which the rate is halved (eq. L4)"),
+    "conditioner_rate_constant": ("1/(N s)", (1e-7, 100.0), "the disk's renewal constant k_c, r_c = k_c F_d s_d (eq. L2)"),
+}
+
+
+def default_constants() -> dict[str, float]:
+    """The uncalibrated constants (SI): those calibrated to Jeong et al. (2024) (:data:`cmpsim.physics.padlife.CALIBRATION`)."""
+    return {"pad_wear_coefficient": float(CALIBRATION["wear_coefficient"]), "critical_glazed_area": float(CALIBRATION["critical_glazed_area"]),
+            "conditioner_rate_constant": float(CALIBRATION["conditioner_rate_constant"])}
+
+
+def check_constants(constants: dict, where: str = "pad life constants") -> dict:
+    """``constants`` checked: known names, numbers inside their valid range (ValueError naming the one that is not)."""
+    out = {}
+    for n, v in (constants or {}).items():
+        if n not in GLAZING_CONSTANTS:
+            raise ValueError(f"{where}: {n} is not a pad life constant; valid: {', '.join(GLAZING_CONSTANTS)}")
+        lo, hi = GLAZING_CONSTANTS[n][1]
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not (lo <= float(v) <= hi):
+            raise ValueError(f"{where}: {n} = {v!r} must be a number in [{lo:g}, {hi:g}] {GLAZING_CONSTANTS[n][0]}")
+        out[n] = float(v)
+    return out

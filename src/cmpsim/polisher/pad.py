@@ -87,13 +87,13 @@ class PadLife:
     pad: FreshPad | None = None
     worn_summits: bool = False
     #: the glazing and conditioning constants of a calibrated process file ({name: SI} of
-    #: :data:`cmpsim.calibration.padlife.GLAZING_CONSTANTS`; None or missing names: the calibrated defaults)
+    #: :data:`cmpsim.physics.padlife.GLAZING_CONSTANTS`; None or missing names: the calibrated defaults)
     constants: dict | None = field(default=None, compare=False)
 
     def __post_init__(self) -> None:
         if self.conditioning not in CONDITIONING:
             raise ValueError(f"conditioning must be one of {CONDITIONING}; got {self.conditioning!r}")
-        from ..calibration.padlife import check_constants
+        from ..physics.padlife import check_constants
 
         check_constants(self.constants or {})
 
