@@ -41,6 +41,7 @@ import numpy as np
 
 from .measurements import StructureRecord
 from .scalefit import ScaleFit, log_intervals
+from .uncertainty import central_jacobian
 
 __all__ = ["DIE_CONSTANTS", "ISOLATED_PITCH", "TestStructure", "DieCalibration", "predict_die", "calibrate_die",
            "choose_free", "heldout_comparison", "start_jacobian", "start_values"]
@@ -472,13 +473,7 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
     fit = least_squares(resid, z0, bounds=(np.log(lo / x0), np.log(hi / x0)), method="trf", x_scale=1.0, diff_step=1e-3,
                         ftol=1e-10, xtol=1e-10, gtol=1e-12, max_nfev=max_nfev)
     z = fit.x
-    J = np.empty((len(records), len(free)))
-    h = 1e-3
-    for k in range(len(free)):
-        zp, zm = z.copy(), z.copy()
-        zp[k] += h
-        zm[k] -= h
-        J[:, k] = (resid(zp) - resid(zm)) / (2 * h)
+    J = central_jacobian(resid, z, len(records), h=1e-3)
     r1 = resid(z)
     chi2 = float(np.sum(r1**2))
     dof = len(records) - len(free)

@@ -175,6 +175,7 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
     start separates them with one degree of freedom left).
     """
     from .die import _covariance, _identifiability
+    from .uncertainty import central_jacobian
     from .identify import choose
 
     records = list(records)
@@ -230,13 +231,7 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
     def resid(z):
         return (predict_lot(records, {**s0, **values_of(z)}, setting) - y) / u
 
-    h = 1e-3
-    J = np.empty((len(records), len(free)))
-    for k in range(len(free)):
-        zp, zm = z.copy(), z.copy()
-        zp[k] += h
-        zm[k] -= h
-        J[:, k] = (resid(zp) - resid(zm)) / (2 * h)
+    J = central_jacobian(resid, z, len(records), h=1e-3)
     r1 = resid(z)
     chi2 = float(np.sum(r1**2))
     dof = len(records) - len(free)
@@ -271,22 +266,14 @@ def _fit(records, setting, free, x0, lo, hi, y, u, s0, max_nfev) -> np.ndarray:
 
 def padlife_constants(source) -> dict | None:
     """The ``[calibration.padlife]`` constants of a process file (a path), checked; None where there are none."""
-    import tomllib
-    from pathlib import Path
-
-    from ..io import read_text
+    from .processfile import read_scale_table
 
     if source is None:
         return None
-    try:
-        data = tomllib.loads(read_text(Path(source), "config file"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"config file {str(source)!r} is not valid TOML: {exc}") from None
-    table = data.get("calibration")
-    pl = table.get("padlife") if isinstance(table, dict) else None
+    pl, name = read_scale_table(source, "padlife")
     if not isinstance(pl, dict):
         return None
     consts = pl.get("constants", {})
     if not isinstance(consts, dict):
-        raise ValueError(f"config file {str(source)!r}: [calibration.padlife] constants must be a table of name = SI value")
-    return check_constants(consts, f"config file {str(source)!r}: [calibration.padlife] constants")
+        raise ValueError(f"{name}: [calibration.padlife] constants must be a table of name = SI value")
+    return check_constants(consts, f"{name}: [calibration.padlife] constants")

@@ -112,7 +112,7 @@ def scales_table(cal) -> dict:
             die["uncertainty_note"] = f"no covariance written: {exc}"
         table["die"] = die
     if getattr(cal, "padlife", None) is not None:
-        from .padlife import GLAZING_CONSTANTS
+        from ..physics.padlife import GLAZING_CONSTANTS
 
         pl = _scale_table(cal.padlife, lambda n: GLAZING_CONSTANTS[n][0])
         pl["constants"] = {n: float(v) for n, v in cal.padlife.constants.items()}  # every constant the lot runs with: fitted or default
@@ -149,14 +149,11 @@ class DieConstants:
         self.process, self.constants, self.uncertainty, self.source = process, dict(constants), uncertainty, source
 
 
-def die_constants(source) -> DieConstants | None:
-    """The ``[calibration.die]`` table of a process file (a path) or of its parsed mapping (a dict, e.g. the
-    JSON of the web page's inputs); None where there is none. ValueError naming the file and the key."""
+def read_scale_table(source, key: str):
+    """(the ``[calibration.<key>]`` table of a process file, the name messages use): ``source`` is a path or its
+    parsed mapping (a dict, e.g. the JSON of the web page's inputs); the table is None where there is none.
+    ValueError naming the file when it is not TOML."""
     import tomllib
-
-    from ..die.process import PROCESSES
-    from ..die.uncertainty import DieUncertainty
-    from .die import DIE_CONSTANTS
 
     if isinstance(source, dict):
         data, name = source, "the inputs"
@@ -169,9 +166,19 @@ def die_constants(source) -> DieConstants | None:
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"{name} is not valid TOML: {exc}") from None
     table = data.get("calibration")
-    if not isinstance(table, dict) or "die" not in table:
+    return (table.get(key) if isinstance(table, dict) else None), name
+
+
+def die_constants(source) -> DieConstants | None:
+    """The ``[calibration.die]`` table of a process file (a path) or of its parsed mapping (a dict, e.g. the
+    JSON of the web page's inputs); None where there is none. ValueError naming the file and the key."""
+    from ..die.process import PROCESSES
+    from ..die.uncertainty import DieUncertainty
+    from .die import DIE_CONSTANTS
+
+    die, name = read_scale_table(source, "die")
+    if die is None:
         return None
-    die = table["die"]
     where = f"{name}: [calibration.die]"
     if not isinstance(die, dict):
         raise ValueError(f"{where} must be a table")
@@ -244,18 +251,11 @@ def pad_base(source, config):
     """The base configuration of pad records under a process file (``source``: its path, or None): the pad's
     calibration base (the 300mm preset on the coarse grid) with the file's pad constants, else ``config``;
     without a file None (the default base of :func:`cmpsim.calibration.thermal.predict_thermal`)."""
-    import tomllib
-
     from ..inputs.config import Config
-    from ..io import read_text
 
     if source is None:
         return None
-    try:
-        data = tomllib.loads(read_text(Path(source), "config file"))
-    except tomllib.TOMLDecodeError as exc:
-        raise ValueError(f"config file {str(source)!r} is not valid TOML: {exc}") from None
-    pad = (data.get("calibration") or {}).get("pad") if isinstance(data.get("calibration"), dict) else None
+    pad, _ = read_scale_table(source, "pad")
     if isinstance(pad, dict) and pad.get("base_preset"):
         base = Config.preset(str(pad["base_preset"])).replace(grid=str(pad.get("base_grid", "coarse")))
         return base.replace(friction_coefficient=config.friction_coefficient, pad_heat_transfer_coefficient=config.pad_heat_transfer_coefficient)

@@ -33,6 +33,7 @@ import numpy as np
 
 from .measurements import ThermalRecord
 from .scalefit import ScaleFit, log_intervals
+from .uncertainty import central_jacobian
 
 __all__ = ["THERMAL_CONSTANTS", "FrictionalPower", "frictional_power", "predict_thermal", "calibrate_thermal", "ThermalCalibration",
            "step_rise", "choose_free", "start_values", "start_jacobian"]
@@ -265,12 +266,7 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
     fit = least_squares(resid, z0, bounds=(np.log(lo / x0), np.log(hi / x0)), method="trf", diff_step=1e-4, ftol=1e-12, xtol=1e-12,
                         gtol=1e-14, max_nfev=max_nfev)
     z = fit.x
-    J = np.empty((len(records), len(free)))
-    for k in range(len(free)):
-        zp, zm = z.copy(), z.copy()
-        zp[k] += 1e-4
-        zm[k] -= 1e-4
-        J[:, k] = (resid(zp) - resid(zm)) / 2e-4
+    J = central_jacobian(resid, z, len(records), h=1e-4)
     r1 = resid(z)
     chi2 = float(np.sum(r1**2))
     dof = len(records) - len(free)
