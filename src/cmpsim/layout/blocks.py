@@ -133,19 +133,13 @@ class Block:
 
     region: kdb.Region
     box: kdb.Box
-    store: kdb.DeepShapeStore | None = None  # the deep region lives as long as its store
     _segments: Segments | None = None
     _border: Segments | None = None
 
     def release(self) -> None:
-        """Let go of the region, its store and the outline (the border stays)."""
+        """Let go of the region and the outline (the border stays)."""
         self.region = kdb.Region()
-        self.store = None
         self._segments = None
-
-    @property
-    def empty(self) -> bool:
-        return self.region.is_empty()
 
     def segments(self) -> Segments:
         """The whole outline (material on the left), read out of KLayout once."""

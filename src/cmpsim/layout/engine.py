@@ -291,10 +291,10 @@ def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: Windo
             b = block_box(layout, key, layer_indexes)
             if b is not None:
                 boxes[key] = b
-        placed = [placed_boxes(b, *the_plan.placements[k]) for k, b in boxes.items()]
-        zones = overlap_zones(np.concatenate(placed)) if placed else np.zeros((0, 4), dtype=np.int64)
+        placed = np.concatenate([placed_boxes(b, *the_plan.placements[k]) for k, b in boxes.items()]) if boxes else np.zeros((0, 4), dtype=np.int64)
+        zones = overlap_zones(placed)
         mask = _zone_mask(zones, grid) if zones is not None else None
-        seams = overlap_zones(np.concatenate(placed), touching=True) if placed else np.zeros((0, 4), dtype=np.int64)
+        seams = overlap_zones(placed, touching=True)
         need_seams = seams is None or len(seams) > 0  # None: too many pairs to tell; look at every border
     if not the_plan.composed or mask is None or mask.mean() > FLAT_FRACTION:
         stats["flat"] = True
@@ -303,11 +303,11 @@ def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: Windo
     canvas = _Canvas(grid)
     blocks: dict[BlockKey, Block] = {}
     for n, key in enumerate(boxes):
-        store = _new_store(threads)  # one store per block: KLayout mixes flat and deep layers of a singular store only
-        region = merged_region(layout.cell(key.cell), layer_indexes, store, excluded=key.excluded)
+        # a store of its own per block: what KLayout's deep merge holds is let go with it (the region returned is flat)
+        region = merged_region(layout.cell(key.cell), layer_indexes, _new_store(threads), excluded=key.excluded)
         if region.is_empty():
             continue
-        block = blocks[key] = Block(region, region.bbox(), store)
+        block = blocks[key] = Block(region, region.bbox())
         m_all, t_all = the_plan.placements[key]
         for m in sorted({tuple(r) for r in m_all.tolist()}):
             t = t_all[np.all(m_all == np.array(m), axis=1)]
