@@ -172,7 +172,9 @@ def test_a_lot_killed_with_sigkill_resumes_bit_for_bit(tmp_path):
     whole = subprocess.run(_lot_command(tmp_path / "whole", wafers), env=env, capture_output=True, text=True, timeout=900)
     assert whole.returncode == 0, whole.stderr
     out = tmp_path / "killed"
-    proc = subprocess.Popen(_lot_command(out, wafers), env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    # the gate blocks the lot for good once wafer 2's checkpoint is written: the kill lands mid-lot, no race
+    gate = [sys.executable, str(Path(__file__).with_name("lot_gate.py")), "2", *_lot_command(out, wafers)[3:]]
+    proc = subprocess.Popen(gate, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     checkpoint = out / NAME
     deadline = time.monotonic() + 900
     try:
