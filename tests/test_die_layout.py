@@ -288,3 +288,59 @@ def test_the_built_in_dies_and_csv_grids_still_run_as_before():
     assert d["regions"] and d["hotspot_count"] == 0 and d["hotspots"] == []
     bad = CliRunner().invoke(main, ["die", "uniform", "--layer", "1/0"])
     assert bad.exit_code == 2 and "--layer" in bad.output
+
+
+# ---------------------------------------------------------------------------- a stack with a calibration's die constants
+def _die_calibration(tmp_path, process="copper", extra=""):
+    """A process file whose [calibration.die] fits contact_height and summit_radius of ``process`` with a covariance (SI, logs)."""
+    p = tmp_path / f"cal_{process}.toml"
+    p.write_text(f'[calibration.die]\nprocess = "{process}"\n{extra}'
+                 '[calibration.die.constants]\ncontact_height = 2e-8\nsummit_radius = 5e-6\n'
+                 '[calibration.die.uncertainty]\nnames = ["contact_height", "summit_radius"]\nvalues = [2e-8, 5e-6]\n'
+                 'covariance_log = [[0.04, 0.01], [0.01, 0.09]]\n')
+    return p
+
+
+def test_a_stack_applies_a_calibrations_die_constants_to_the_levels_of_its_process(chip, stack_file, tmp_path):
+    from cmpsim.calibration.processfile import die_constants
+
+    dc = die_constants(_die_calibration(tmp_path))
+    st = simulate_stack(chip, stack_file, blanket_rate=K, planarization_length=PL, calibration=dc)
+    plain = simulate_stack(chip, stack_file, blanket_rate=K, planarization_length=PL)
+    m1, m2 = st.levels
+    # the copper level runs with the fitted constants and carries their covariance; the oxide level is as before
+    assert m1.process.contact_height == 2e-8 and m1.process.summit_radius == 5e-6 and m1.uncertainty is dc.uncertainty
+    assert m1.process.trench_depth == pytest.approx(0.4e-6)  # the stack file's own input is kept
+    assert m2.uncertainty is None and m2.process == plain.levels[1].process
+    alone = DieModel(process=m1.process, blanket_rate=K, planarization_length=PL).run(layout_die(chip, ["1/0"], 20e-6))
+    assert np.array_equal(m1.evolution.thickness, alone.evolution.thickness, equal_nan=True)
+    hot = st.to_dict()["hotspots"]
+    assert hot and all(("interval" in h) == (h["level"] == "m1") for h in hot)
+    for h in hot:
+        if h["level"] == "m1":
+            lo, hi = h["interval"]
+            assert lo <= h["value"] <= hi and 0.0 <= h["probability"] <= 1.0
+
+
+def test_a_stack_refuses_a_calibration_it_cannot_apply(chip, stack_file, tmp_path):
+    from cmpsim.calibration.processfile import die_constants
+
+    copper = die_constants(_die_calibration(tmp_path))
+    st = tmp_path / "clash.toml"
+    st.write_text(stack_file.read_text().replace('trench_depth = "0.4 um"', 'trench_depth = "0.4 um"\ncontact_height = "30 nm"'))
+    with pytest.raises(ValueError, match=r"level 'm1' sets contact_height, calibrated in"):
+        simulate_stack(chip, st, blanket_rate=K, planarization_length=PL, calibration=copper)
+    oxide_only = tmp_path / "oxide.toml"
+    oxide_only.write_text('[[level]]\nname = "m2"\nlayers = ["2/0"]\nprocess = "oxide"\n')
+    with pytest.raises(ValueError, match="calibrated on copper structures; no level of the stack is copper"):
+        simulate_stack(chip, oxide_only, blanket_rate=K, planarization_length=PL, calibration=copper)
+
+
+def test_a_stack_run_takes_the_process_file_from_the_command_line(chip, stack_file, tmp_path):
+    cal = _die_calibration(tmp_path)
+    res = CliRunner().invoke(main, ["die", str(chip), "--stack", str(stack_file), "--blanket-rate", "120nm/min",
+                                    "--planarization-length", "0.3mm", "--config", str(cal), "--json"])
+    assert res.exit_code == 0, res.output
+    d = json.loads(res.stdout)
+    assert "uncertainty" in d["levels"][0] and "uncertainty" not in d["levels"][1]
+    assert any("probability" in h for h in d["hotspots"])

@@ -106,7 +106,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
                 result = stack = simulate_stack(layout, levels, window, top=top or options.get("top"), pdk=pdk or options.get("pdk"),
                                                 layer_map=layer_map or options.get("layer_map"), config=cfg, blanket_rate=rate, time=t,
                                                 spec=parse_spec(options.get("spec")) | spec, planarization_length=pl, weighting=weighting,
-                                                feature_contact=feature_contact, progress=told)
+                                                feature_contact=feature_contact, progress=told, calibration=_stack_calibration(config_path))
         elif real:
             if not layers:
                 raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml")
@@ -230,6 +230,13 @@ def _print_hotspots(console, hot) -> None:
     console.print(_rich_table(title, header, show))
 
 
+def _stack_calibration(config_path):
+    """The die constants of a process file (--config) for a stack's levels of their process, or None."""
+    from ..calibration.processfile import die_constants
+
+    return die_constants(config_path) if config_path else None
+
+
 def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> dict:
     """The die keywords with the calibrated die constants of a process file (--config) and, except with --wafer, their covariance."""
     from ..calibration.processfile import apply_die_constants, die_constants
@@ -238,8 +245,7 @@ def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> d
     if dc is None:
         return kwargs
     if stack_path:
-        raise ValueError(f"--stack with --config {config_path}: a stack's levels set their own process; its die constants apply to one "
-                         "level at a time (cmpsim die LAYOUT --layer ... --process ...)")
+        return kwargs  # a stack applies them level by level, to the levels of their process (simulate_stack(calibration=))
     if wafer and dc.uncertainty is not None:
         from .group import _warn
 

@@ -197,6 +197,8 @@ class StackLevel:
     name: str
     layers: tuple
     process: DieProcess
+    #: the die inputs the stack file set for this level (a calibration may not override them)
+    given: tuple = ()
 
 
 @dataclass
@@ -287,7 +289,7 @@ def read_stack(path) -> tuple[list[StackLevel], dict]:
             process = DieProcess.from_values(lv["process"], **inputs)
         except ValueError as exc:
             raise ValueError(f"{where} ({name}): {exc}") from None
-        levels.append(StackLevel(name, tuple(layers), process))
+        levels.append(StackLevel(name, tuple(layers), process, tuple(inputs)))
     options = {k: data[k] for k in ("window", "pdk", "layer_map", "top", "spec") if k in data}
     if "layer_map" in options and not Path(options["layer_map"]).is_absolute():
         options["layer_map"] = str(p.parent / options["layer_map"])  # relative to the stack file
@@ -296,10 +298,35 @@ def read_stack(path) -> tuple[list[StackLevel], dict]:
     return levels, options
 
 
+def _calibrated_level(level: StackLevel, calibration, planarization_length, weighting: str):
+    """(process, planarization length, uncertainty) of a stack ``level`` with a calibration's die constants
+    applied if it is a level of the calibration's process (else as the level and the run set them).
+    ValueError where the stack file or the run sets what the calibration fitted."""
+    if calibration is None or level.process.kind != calibration.process:
+        return level.process, planarization_length, None
+    where = f"--stack level {level.name!r}"
+    source = calibration.source or "the calibration"
+    clash = [n for n in level.given if n in calibration.constants]
+    if clash:
+        raise ValueError(f"{where} sets {', '.join(clash)}, calibrated in {source}; remove it from the stack file or use a process file without it")
+    consts = dict(calibration.constants)
+    if "planarization_length" in consts:
+        if planarization_length is not None:
+            raise ValueError(f"--planarization-length and the planarization_length calibrated in {source}: give one")
+        if weighting != "gaussian":
+            raise ValueError(f"--weighting {weighting}: the planarization_length calibrated in {source} is the Gaussian weighting's; "
+                             "use --weighting gaussian")
+    unc = calibration.uncertainty
+    for n in (unc.names if unc is not None else ()):
+        consts.pop(n)  # applied by DieModel from the uncertainty's values (cmpsim.die.polish._fitted)
+    length = consts.pop("planarization_length", planarization_length)
+    return (level.process.replace(**consts) if consts else level.process), length, unc
+
+
 def simulate_stack(layout, levels, window: float | None = None, *, top: str | None = None, pdk: str | None = None, layer_map=None,
                    config=None, blanket_rate: float | None = None, time: float | None = None, spec=None,
                    planarization_length: float | None = None, weighting: str = "gaussian", feature_contact: str = "elastic",
-                   progress=None) -> StackResult:
+                   progress=None, calibration=None) -> StackResult:
     """Polish the levels of a stack bottom first (docs/model.md, section 18.10).
 
     ``layout`` is a layout path or a :class:`cmpsim.layout.Layout`, ``levels`` a list of
@@ -308,7 +335,10 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
     the same window grid, on one read of the file (:func:`cmpsim.layout.extract_levels`); each is
     polished over the topography the level below left
     (:meth:`cmpsim.die.evolution.DieEvolution.topography`). The wafer is solved once per film.
-    ``progress`` (stage, done, total) is told how the extraction goes.
+    ``progress`` (stage, done, total) is told how the extraction goes. ``calibration``: a process
+    file's die constants (:class:`cmpsim.calibration.processfile.DieConstants`: ``process``,
+    ``constants`` {name: SI}, ``uncertainty``, ``source``) applied to the levels of its process, whose
+    hotspots then carry ``interval`` and ``probability`` (:func:`_calibrated_level`).
     """
     from ..layout import read_layout
     from ..inputs.units import to_si
@@ -338,10 +368,15 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
     config = _config(config)
     rates: dict[str, float] = {}
     out, incoming = [], None
+    if calibration is not None and not any(lv.process.kind == calibration.process for lv in levels):
+        raise ValueError(f"the die constants of {calibration.source or 'the calibration'} were calibrated on {calibration.process} structures; "
+                         f"no level of the stack is {calibration.process} (levels: "
+                         + ", ".join(f"{lv.name} {lv.process.kind}" for lv in levels) + ")")
     for lv, lay in zip(levels, dies):
         film = film_stack(lv.process).film
-        model = DieModel(config, lv.process, blanket_rate=blanket_rate if blanket_rate is not None else rates.get(film),
-                         planarization_length=planarization_length, weighting=weighting, feature_contact=feature_contact, spec=spec)
+        process, length, unc = _calibrated_level(lv, calibration, planarization_length, weighting)
+        model = DieModel(config, process, blanket_rate=blanket_rate if blanket_rate is not None else rates.get(film),
+                         planarization_length=length, weighting=weighting, feature_contact=feature_contact, spec=spec, uncertainty=unc)
         rates[film] = model.blanket_rate
         res = model.run(lay, time, incoming=incoming, level=lv.name)
         out.append(res)
