@@ -199,6 +199,41 @@ def test_a_lot_killed_with_sigkill_resumes_bit_for_bit(tmp_path):
     assert json.loads(resumed.stdout)["wafers"] == a["wafers"]
 
 
+# --- the controller's own model of the pad ----------------------------------------------------------
+
+def test_the_controller_follows_its_own_model_of_the_pad_not_the_simulated_pads_state(tmp_path):
+    """The controller's glazing clock is its model of the pad's life run through the steps it commanded
+    (model_pad_constants; default the pad's own). The same constants given explicitly give the lot bit
+    for bit; a model that glazes twice as fast commands other times on the same pad, and the checkpoint
+    carries the model's state."""
+    from cmpsim.physics.padlife import default_constants
+
+    kw = dict(control="ewma", conditioning="none", seed=1, overrides=COARSE, zone_feedback=False)
+    own = run_lot(RECIPE, 3, **kw)
+    explicit = run_lot(RECIPE, 3, model_pad_constants=default_constants(), **kw)
+    assert [w.to_record() for w in own.wafers] == [w.to_record() for w in explicit.wafers]
+    wrong = {"pad_wear_coefficient": 2 * default_constants()["pad_wear_coefficient"]}
+    other = run_lot(RECIPE, 3, model_pad_constants=wrong, checkpoint=tmp_path / "c.json", **kw)
+    assert all(a.polish_time != b.polish_time for a, b in zip(own.wafers, other.wafers))
+    saved = json.loads((tmp_path / "c.json").read_text())
+    assert saved["model_life"]["polish_time"] > 0 and "model_pad_constants" in saved["inputs"]
+    # a model that glazes faster predicts a slower pad, so it polishes longer than the pad needs: the first wafers overshoot
+    assert other.wafers[0].final_thickness_mean < own.wafers[0].final_thickness_mean
+
+
+def test_the_cli_refuses_a_controller_config_it_cannot_use(tmp_path):
+    ctl = tmp_path / "ctl.toml"
+    ctl.write_text("[calibration.padlife.constants]\npad_wear_coefficient = 5.5e-15\n")
+    res = CliRunner().invoke(main, ["lot", str(RECIPE_PATH), "--wafers", "2", "--controller-config", str(ctl)])
+    assert res.exit_code == 2 and "needs --control ewma" in res.output
+    res = CliRunner().invoke(main, ["lot", str(RECIPE_PATH), "--wafers", "2", "--control", "ewma", "--controller-config", str(RECIPE_PATH)])
+    assert res.exit_code == 2 and "no [calibration.padlife] table" in res.output
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[calibration.padlife.constants]\npad_wear_coefficient = -1.0\n")
+    res = CliRunner().invoke(main, ["lot", str(RECIPE_PATH), "--wafers", "2", "--control", "ewma", "--controller-config", str(bad)])
+    assert res.exit_code == 2 and "pad_wear_coefficient" in res.output
+
+
 # --- the issue's criteria on the shipped oxide recipe (25 wafers, no conditioning) ------------------
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,8 @@ partial one). It holds:
   inputs differ is refused, naming them (:class:`CheckpointMismatch`);
 - ``next_wafer`` (0-based) and the ``records`` of the wafers done;
 - the state carried from wafer to wafer: the pad (temperature column, worn volume, times), the rate
-  estimator, the zone feedback's pressures and shape;
+  estimator, the controller's own model of the pad's life (``model_life``: the worn volume it
+  predicts from the polish times it commanded), the zone feedback's pressures and shape;
 - the set-up, so that it is not recomputed: the rings' radii and area weights, the incoming
   profiles, the qualification record, the zone response.
 
@@ -36,10 +37,10 @@ from ..physics.thermal import PadThermalState
 from .engine import PadState
 
 __all__ = ["FORMAT", "NAME", "LotCheckpoint", "CheckpointMismatch", "read_checkpoint", "write_checkpoint", "pad_state_to_dict",
-           "pad_state_from_dict", "digest", "VERSION"]
+           "pad_state_from_dict", "life_to_dict", "life_from_dict", "digest", "VERSION"]
 
 #: The checkpoint's format tag.
-FORMAT = "cmpsim-lot-checkpoint/1"
+FORMAT = "cmpsim-lot-checkpoint/2"
 #: The checkpoint's file name in ``cmpsim lot --out DIR``.
 NAME = "lot.checkpoint.json"
 #: The code version a checkpoint is tied to (a resumed lot must run the same code to be identical).
@@ -62,12 +63,25 @@ def pad_state_to_dict(pad: PadState) -> dict:
     """The pad carried between wafers as JSON-able lists and floats."""
     thermal = None if pad.thermal is None else {"temperature": np.asarray(pad.thermal.temperature, dtype=float).tolist(),
                                                 "time": float(pad.thermal.time)}
-    life = None
-    if isinstance(pad.life, PadLifeState):
-        worn = pad.life.worn_volume
-        life = {"worn_volume": np.asarray(worn, dtype=float).tolist(), "array": isinstance(worn, np.ndarray) and np.ndim(worn) > 0,
-                "polish_time": float(pad.life.polish_time)}
-    return {"thermal": thermal, "life": life, "time": float(pad.time)}
+    return {"thermal": thermal, "life": life_to_dict(pad.life), "time": float(pad.time)}
+
+
+def life_to_dict(life) -> dict | None:
+    """A pad-life state (worn volume, polish time) as JSON-able lists and floats; None for none."""
+    if not isinstance(life, PadLifeState):
+        return None
+    worn = life.worn_volume
+    return {"worn_volume": np.asarray(worn, dtype=float).tolist(), "array": isinstance(worn, np.ndarray) and np.ndim(worn) > 0,
+            "polish_time": float(life.polish_time)}
+
+
+def life_from_dict(data: dict | None) -> PadLifeState | None:
+    """The inverse of :func:`life_to_dict`."""
+    if data is None:
+        return None
+    worn = data["worn_volume"]
+    worn = np.asarray(worn, dtype=float) if data["array"] else np.float64(worn)
+    return PadLifeState(worn, float(data["polish_time"]))
 
 
 def pad_state_from_dict(data: dict) -> PadState:
@@ -75,12 +89,7 @@ def pad_state_from_dict(data: dict) -> PadState:
     thermal = None
     if data["thermal"] is not None:
         thermal = PadThermalState(np.asarray(data["thermal"]["temperature"], dtype=float), float(data["thermal"]["time"]))
-    life = None
-    if data["life"] is not None:
-        worn = data["life"]["worn_volume"]
-        worn = np.asarray(worn, dtype=float) if data["life"]["array"] else np.float64(worn)
-        life = PadLifeState(worn, float(data["life"]["polish_time"]))
-    return PadState(thermal, life, float(data["time"]))
+    return PadState(thermal, life_from_dict(data["life"]), float(data["time"]))
 
 
 @dataclass
@@ -95,11 +104,13 @@ class LotCheckpoint:
     zones: dict | None
     records: list = field(default_factory=list)
     solves: int = 0
+    #: the controller's model of the pad's life (:func:`life_to_dict`; None without control)
+    model_life: dict | None = None
 
     def to_json(self) -> str:
         return json.dumps({"format": FORMAT, "version": VERSION, "inputs": self.inputs, "next_wafer": self.next_wafer,
                            "setup": self.setup, "pad_state": self.pad_state, "estimator": self.estimator, "zones": self.zones,
-                           "records": self.records, "solves": self.solves})
+                           "records": self.records, "solves": self.solves, "model_life": self.model_life})
 
 
 def write_checkpoint(path, checkpoint: LotCheckpoint) -> None:
@@ -131,4 +142,4 @@ def read_checkpoint(path, inputs: dict) -> LotCheckpoint | None:
         raise CheckpointMismatch(f"--resume: the checkpoint {str(path)!r} belongs to a lot with other inputs ({detail}); "
                                  "run with the checkpoint's inputs, or remove it (or choose another --out) to start a new lot")
     return LotCheckpoint(saved, int(data["next_wafer"]), data["setup"], data["pad_state"], data["estimator"], data["zones"],
-                         list(data["records"]), int(data["solves"]))
+                         list(data["records"]), int(data["solves"]), data.get("model_life"))

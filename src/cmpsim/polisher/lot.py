@@ -39,11 +39,12 @@ import numpy as np
 
 from ..results.uniformity import weighted_std_over_mean
 from ..physics.padlife import ConditionerDisk, FreshPad, PadLifeState
-from .checkpoint import LotCheckpoint, digest, pad_state_from_dict, pad_state_to_dict, read_checkpoint, write_checkpoint
+from .checkpoint import (LotCheckpoint, digest, life_from_dict, life_to_dict, pad_state_from_dict, pad_state_to_dict, read_checkpoint,
+                         write_checkpoint)
 from .control import CONTROL, DRIFT_WEIGHT, WEIGHT, estimator_from_dict, feed_forward_time, make_estimator
 from .engine import PadState, idle, polish
 from .incoming import incoming_profiles
-from .pad import GlazingClock, PadLife, mean_factor
+from .pad import GlazingClock, PadLife, mean_factor, wear_through
 from .recipe import RecipeError, load_recipe
 from .zones import ZoneFeedback, ZoneState
 
@@ -240,6 +241,7 @@ def run_lot(
     after_wafer=None,
     pad_constants: dict | None = None,
     cache: dict | None = None,
+    model_pad_constants: dict | None = None,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -299,6 +301,12 @@ def run_lot(
     resume : bool
         Go on from ``checkpoint`` if it exists (refused, naming them, if its inputs differ); the
         result is identical to the lot run without interruption.
+    model_pad_constants : dict, optional
+        The controller's model of the pad's life ({name: SI} as ``pad_constants``; default the
+        pad's own). The controller never reads the simulated pad's state: it follows its own model
+        of the pad's life through the polish times and pressures it commanded (its glazing clock
+        and drift prior, eqs. C4-C5). A model other than the pad (another pad's calibration, or a
+        deliberate error) shows how the control holds when its model is wrong (docs/polisher.md).
     after_wafer : callable, optional
         Called with the wafer's :class:`WaferRecord` after each wafer (and its checkpoint).
     """
@@ -311,6 +319,8 @@ def run_lot(
     if not (isinstance(wafers, (int, np.integer)) and wafers >= 1):
         raise ValueError(f"wafers must be a whole number >= 1; got {wafers!r}")
     life_model = PadLife(conditioning, disk, pad, worn_summits, pad_constants)  # checks the conditioning
+    # the controller's model of the pad's life (its glazing clock): the pad's own unless told otherwise
+    model = life_model if model_pad_constants is None else PadLife(conditioning, disk, pad, worn_summits, model_pad_constants)
     if control not in CONTROL:
         raise ValueError(f"control must be one of {CONTROL}; got {control!r}")
     if not (math.isfinite(idle_time) and idle_time >= 0):
@@ -333,6 +343,8 @@ def run_lot(
                      zone_weight, zone_feedback, time_step, qualification, worn_summits) | {"clock": clock, "drift_prior": drift_prior}
     if pad_constants:  # a calibrated pad life decides the numbers too (absent otherwise: earlier checkpoints still resume)
         inputs["pad_constants"] = repr(sorted((k, float(v)) for k, v in pad_constants.items()))
+    if model_pad_constants is not None:
+        inputs["model_pad_constants"] = repr(sorted((k, float(v)) for k, v in model_pad_constants.items()))
 
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
         cooled = idle(result.pad_state, idle_time, base)
@@ -341,16 +353,18 @@ def run_lot(
     cache = {} if cache is None else cache  # the step solves of the last wafer: a wafer with the same inputs is not solved again
     saved = read_checkpoint(checkpoint, inputs) if resume else None
     if saved is None:
-        setup, pad_state, estimator, zones, feedback, solves = _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base,
-                                                                          time_step, qualification, life_model, between_wafers, cache,
-                                                                          weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior)
-        saved = LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones), [], solves)
+        setup, pad_state, estimator, zones, feedback, solves, model_life = _set_up(
+            recipe, wafers, controlled, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers, cache,
+            weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior, model, idle_time)
+        saved = LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones), [], solves,
+                              life_to_dict(model_life))
         if checkpoint is not None:
             write_checkpoint(checkpoint, saved)
     # the lot always goes on from the checkpoint's numbers, resumed or not, so that both run the same
     # arithmetic on the same arrays (a matrix product's last bit can depend on its operands' layout)
     setup, start, solves = saved.setup, saved.next_wafer, saved.solves
     pad_state, estimator, zones = _restore(saved)
+    model_life = life_from_dict(saved.model_life)
     feedback = None if setup["feedback"] is None else _feedback_from_dict(setup["feedback"])
     records = [WaferRecord.from_dict(r) for r in saved.records]
 
@@ -372,8 +386,8 @@ def run_lot(
                 pressures = plan.pressures
                 ov["zone_pressures"] = pressures
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
-            predicted, t, wafer_recipe = _next_wafer(recipe, step_k, ov, estimator, factor, inc_mean, float(target), k + 1, pad_state.life,
-                                                     life_model, time_step)
+            predicted, t, wafer_recipe = _next_wafer(recipe, step_k, ov, estimator, factor, inc_mean, float(target), k + 1, model_life,
+                                                     model, time_step)
         result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
                         pad_life=life_model, cache=cache)
         solves += result.solves
@@ -400,14 +414,18 @@ def run_lot(
         )
         records.append(record)
         pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
+        if controlled:  # the controller's model of the pad follows the wafer's steps as they ran (their logged times)
+            done = [(wafer_recipe.step_config(s, ov), r.duration) for s, r in zip(wafer_recipe.steps, result.steps)]
+            model_age, model_life = wear_through(model, done, model_life, time_step) if total_time > 0 else (None, model_life)
+            model_life = model.idle(model_life, idle_time)
         if controlled and total_time > 0:
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
-            age = record.rate_factor if estimator.clock == "glazing" else float(k + 1)
+            age = model_age if estimator.clock == "glazing" else float(k + 1)
             estimator = estimator.update(removed / total_time / factor, age)
             if feedback is not None:
                 zones = feedback.learn(zones, pressures, (inc - final) / total_time)
         saved = LotCheckpoint(inputs, k + 1, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones),
-                              [r.to_record() for r in records], solves)
+                              [r.to_record() for r in records], solves, life_to_dict(model_life))
         if checkpoint is not None:
             write_checkpoint(checkpoint, saved)
         pad_state, estimator, zones = _restore(saved)
@@ -464,16 +482,21 @@ def _dict(state):
 
 
 def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers,
-            cache, weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior):
+            cache, weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior, model, idle_time):
     """The lot before its first wafer: the monitor wafers (or the fresh pad's prediction), the rings,
-    the incoming profiles, the first rate estimate, the zone response and the first shape."""
+    the incoming profiles, the first rate estimate, the zone response and the first shape; and the
+    controller's ``model`` of the pad's life through the monitor wafers (its state after them)."""
     pad_state = PadState(life=PadLifeState())
+    model_life, model_age = PadLifeState(), 1.0
     if qualification:
         solves = 0
         for _ in range(qualification):
             first = polish(recipe, overrides=overrides, time_step=time_step, pad_state=pad_state, pad_life=life_model, cache=cache)
             solves += first.solves
             pad_state = between_wafers(first)
+            done = [(recipe.step_config(s, overrides), r.duration) for s, r in zip(recipe.steps, first.steps)]
+            model_age, model_life = wear_through(model, done, model_life, time_step)
+            model_life = model.idle(model_life, idle_time)
     else:
         first = polish(recipe, overrides=overrides, time_step=time_step, cache=cache)
         solves = first.solves
@@ -500,7 +523,7 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
     start_pressures = tuple(base.zone_pressures) if base.zone_pressures else ((base.applied_pressure,) * len(base.zone_radii) if zoned else ())
     estimator = feedback = zones = None
     if controlled:
-        age = (_mean_factor(first) if qualification else 1.0) if clock == "glazing" else 0.0  # the monitor wafer's age (a fresh pad: 1)
+        age = model_age if clock == "glazing" else 0.0  # the monitor wafer's age in the controller's model (a fresh pad: 1)
         estimator = make_estimator(control, first_removed / first_time, weight, drift_weight, clock, age, drift_prior)
         if zoned and zone_feedback:
             from ..head.zone_response import ZoneSolver, profile_of, response_matrix
@@ -519,7 +542,7 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
             zones = ZoneState(feedback.start_pressures, measured / float(weights @ measured))  # the first shape: the monitor wafer's
     setup = {"radius": radius.tolist(), "weights": weights.tolist(), "profiles": profiles.tolist(), "qualification": qualified,
              "start_pressures": [float(p) for p in start_pressures], "feedback": None if feedback is None else _feedback_to_dict(feedback)}
-    return setup, pad_state, estimator, zones, feedback, solves
+    return setup, pad_state, estimator, zones, feedback, solves, (model_life if controlled else None)
 
 
 def _feedback_to_dict(f: ZoneFeedback) -> dict:

@@ -153,6 +153,13 @@ def mean_factor(pad_life: PadLife, steps, life: PadLifeState, time_step: float) 
     the factors at the time steps' ends, as the recipe engine records them (``StepResult.glazing``),
     for ``steps`` [(config, duration s), ...] polished from the pad-life state ``life`` (the lot's
     controller asks it of a wafer before polishing it: its pad-age clock, docs/polisher.md)."""
+    return wear_through(pad_life, steps, life, time_step)[0]
+
+
+def wear_through(pad_life: PadLife, steps, life: PadLifeState, time_step: float) -> tuple[float, PadLifeState]:
+    """(:func:`mean_factor` of ``steps`` [(config, duration s), ...], the pad-life state after them): a
+    wafer's steps as the recipe engine runs them (time steps of ``time_step`` s, the last one shorter),
+    from ``life``. The lot's controller follows its own model of the pad with it (docs/polisher.md, C5)."""
     times, factors, clock = [], [], 0.0
     for config, duration in steps:
         wear = pad_life.at(config)
@@ -168,7 +175,7 @@ def mean_factor(pad_life: PadLife, steps, life: PadLifeState, time_step: float) 
             factors.append(wear.factor(life))
     t, f = np.asarray(times), np.asarray(factors)
     span = t[-1] - t[0]
-    return float(np.trapezoid(f, t) / span) if span > 0 else float(f[0])
+    return (float(np.trapezoid(f, t) / span) if span > 0 else float(f[0])), life
 
 
 class GlazingClock:
