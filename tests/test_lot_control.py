@@ -234,6 +234,20 @@ def test_the_cli_refuses_a_controller_config_it_cannot_use(tmp_path):
     assert res.exit_code == 2 and "pad_wear_coefficient" in res.output
 
 
+def test_a_drift_that_carries_the_rate_below_zero_stops_the_lot_saying_why():
+    """A per-wafer drift learnt on a pad that glazes fast can extrapolate to a negative rate (measured: the
+    model-free double EWMA on a pad glazing twice as fast, docs/polisher.md): no polish time follows, and the
+    lot stops naming the wafer, the controller's state and what to do, not with a bare rate error."""
+    from dataclasses import replace
+
+    from cmpsim.polisher.lot import _prediction
+
+    est = replace(make_estimator("ewma", 50e-9 / 60, 0.3, 0.3, "wafer", 8.0, "none"), drift=-20e-9 / 60)
+    assert _prediction(est, 9.0, 1.0, 9) == pytest.approx(30e-9 / 60)
+    with pytest.raises(ValueError, match=r"wafer 12: the ewma controller predicts a removal rate of -10 nm/min .*drift -20 nm/min.*--drift-clock glazing"):
+        _prediction(est, 11.0, 1.0, 12)
+
+
 # --- the issue's criteria on the shipped oxide recipe (25 wafers, no conditioning) ------------------
 
 @pytest.fixture(scope="module")

@@ -448,7 +448,7 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
         return replace(recipe, steps=tuple(steps))
 
     if estimator.clock != "glazing":
-        predicted = estimator.predict(float(index)) * factor
+        predicted = _prediction(estimator, float(index), factor, index)
         t = max(feed_forward_time(predicted, inc_mean, target), time_step)
         return predicted, t, with_time(t)
     configs = [recipe.step_config(s, overrides) for s in recipe.steps]
@@ -458,16 +458,30 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
         def clock(t):
             return mean_factor(life_model, list(zip(configs, [t if j == step_k else s.limit for j, s in enumerate(recipe.steps)])), life,
                                time_step)
-    t = max(feed_forward_time(estimator.predict(estimator.age) * factor, inc_mean, target), time_step)
+    t = max(feed_forward_time(_prediction(estimator, estimator.age, factor, index), inc_mean, target), time_step)
     for _ in range(AGE_ITERATIONS):
         age = clock(t)
-        predicted = estimator.predict(age) * factor
+        predicted = _prediction(estimator, age, factor, index)
         new = max(feed_forward_time(predicted, inc_mean, target), time_step)
         done = abs(new - t) <= 1e-9
         t = new
         if done:
             break
     return predicted, t, with_time(t)
+
+
+def _prediction(estimator, age: float, factor: float, index: int) -> float:
+    """The controller's rate (m/s) for wafer ``index`` at pad ``age`` (eq. C4 times Z6); ValueError saying
+    why when its drift carries the rate to zero or below (no polish time can be commanded then)."""
+    rate = estimator.predict(age) * factor
+    if not (math.isfinite(rate) and rate > 0.0):
+        state = f"level {estimator.level * 6e10:.4g} nm/min" + (f", drift {estimator.drift * 6e10:.4g} nm/min per unit of age from age "
+                                                                  f"{estimator.age:.4g} to {age:.4g}" if hasattr(estimator, "drift") else "")
+        raise ValueError(f"wafer {index}: the {estimator.name} controller predicts a removal rate of {rate * 6e10:.4g} nm/min ({state}): "
+                         "its linear drift does not describe this pad's decay, and no polish time follows; use the glazing clock with a "
+                         "pad-life model calibrated to this pad (--drift-clock glazing, cmpsim calibrate LOT.csv --recipe), or a smaller "
+                         "--drift-weight")
+    return rate
 
 
 def _restore(saved: LotCheckpoint):
