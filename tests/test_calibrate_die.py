@@ -214,6 +214,31 @@ def test_hotspot_probability_falls_as_its_limit_rises(calibrated_run):
     assert np.all(np.diff(p) <= 1e-12)
 
 
+def test_windows_under_their_limit_whose_interval_reaches_it_are_listed_at_risk(calibrated_run):
+    """A calibrated run also lists the windows that pass but may fail: under the limit, 95 % interval
+    reaching it (probability >= 0.025). With the limit just above the worst window every window is
+    under it, and the worst is the likeliest; an uncalibrated run has no such list."""
+    from cmpsim.die.hotspots import AT_RISK
+
+    _, _, run = calibrated_run
+    worst = run.hotspots()[0]
+    limit = abs(worst["value"]) * 1.02
+    risk = run.at_risk({"dishing": limit})
+    assert not run.hotspots({"dishing": limit}) and risk
+    assert risk[0]["value"] == pytest.approx(worst["value"]) and risk[0]["probability"] < 0.5
+    for h in risk:
+        lo, hi = h["interval"]
+        assert abs(h["value"]) <= h["limit"] and hi >= h["limit"] * (1 - 1e-9) and AT_RISK <= h["probability"] < 0.5
+    assert [h["probability"] for h in risk] == sorted((h["probability"] for h in risk), reverse=True)
+    d = run.to_dict()
+    assert d["at_risk_count"] == len(d["at_risk"]) and all("box" not in h for h in d["at_risk"])
+    # every window over the limit is a hotspot, every one under it with p >= 0.025 at risk: no window is in both
+    hot = {(h["x"], h["y"]) for h in d["hotspots"]}
+    assert not hot & {(h["x"], h["y"]) for h in d["at_risk"]}
+    plain = simulate("lines", process="copper", blanket_rate=15.9e-9, cell_size=200e-6, spec={"dishing": "100 nm"})
+    assert plain.at_risk() == [] and "at_risk" not in plain.to_dict()
+
+
 @pytest.mark.slow
 def test_linearisation_agrees_with_a_sample_of_the_covariance(calibrated_run):
     """sigma of the worst window by linearisation against 200 draws of the covariance (within 20 %: the sample's

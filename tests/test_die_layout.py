@@ -344,3 +344,8 @@ def test_a_stack_run_takes_the_process_file_from_the_command_line(chip, stack_fi
     d = json.loads(res.stdout)
     assert "uncertainty" in d["levels"][0] and "uncertainty" not in d["levels"][1]
     assert any("probability" in h for h in d["hotspots"])
+    assert d["at_risk_count"] == len(d["at_risk"]) == d["levels"][0]["at_risk_count"] and "at_risk" not in d["levels"][1]
+    text = CliRunner().invoke(main, ["die", str(chip), "--stack", str(stack_file), "--blanket-rate", "120nm/min",
+                                     "--planarization-length", "0.3mm", "--config", str(cal)])
+    assert text.exit_code == 0, text.output
+    assert ("may exceed it" in text.output) == bool(d["at_risk"]) and "interval" in text.output and "probability" in text.output

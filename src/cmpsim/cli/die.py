@@ -174,6 +174,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     console.print(_rich_table(f"die {die.layout.name!r} ({die.process.kind}) after {d['time']:.1f} s", ["region", "density", "line width", "eff. density", "step height", "dishing", "erosion"], rows))
     if d.get("hotspots") and "probability" in d["hotspots"][0]:  # a calibrated run: the hotspots with their intervals
         _print_hotspots(console, d["hotspots"])
+    _print_at_risk(console, d.get("at_risk"))
     console.print(f"planarization length {d['planarization_length'] * 1e3:.3g} mm, {d['weighting']} weighting (from the pad stack: "
                   f"{d['planarization_length_gaussian_from_pad'] * 1e3:.3g} mm Gaussian, {d['planarization_length_elliptic_from_pad'] * 1e3:.3g} mm elliptic); "
                   f"blanket rate {die.blanket_rate * 6e10:.4g} nm/min; time to planarize {um(d['time_to_planarize'], 1, 's')}"
@@ -204,9 +205,11 @@ def _print_layout_run(console, result, is_stack: bool, wafer: bool) -> None:
                      str(d["hotspot_count"])])
     console.print(_rich_table("die on a real layout", ["level", "process", "windows", "time", "thickness range", "step height max",
                                                        "dishing max", "erosion max", "hotspots"], rows))
-    hot = result.to_dict()["hotspots"] if is_stack else levels[0].to_dict()["hotspots"]
+    whole = result.to_dict() if is_stack else levels[0].to_dict()
+    hot = whole["hotspots"]
     if hot:
         _print_hotspots(console, hot)
+    _print_at_risk(console, whole.get("at_risk"))
     if wafer:
         import numpy as np
 
@@ -220,12 +223,18 @@ def _print_hotspots(console, hot) -> None:
     def nm(v):
         return "-" if v is None else f"{v * 1e9:.4g} nm"
 
-    sure = "probability" in hot[0]
+    sure = any("probability" in h for h in hot)  # a calibrated run (in a stack, its calibrated levels)
+
+    def spread(h):
+        if "probability" not in h:
+            return ["-", "-"]  # a level the calibration does not cover
+        return [f"{h['interval'][0] * 1e9:.4g}-{h['interval'][1] * 1e9:.4g}", f"{h['probability']:.3f}"]
+
     levels = any(h.get("level") for h in hot)
     show = [([h.get("level", "")] if levels else []) + [h["kind"], f"{h['x'] * 1e6:.1f}", f"{h['y'] * 1e6:.1f}", nm(h["value"]), nm(h["limit"])]
-            + ([f"{h['interval'][0] * 1e9:.4g}-{h['interval'][1] * 1e9:.4g}", f"{h['probability']:.3f}"] if sure else []) for h in hot[:10]]
+            + (spread(h) if sure else []) for h in hot[:10]]
     header = (["level"] if levels else []) + ["kind", "x (um)", "y (um)", "value", "limit"] + (["interval nm", "probability"] if sure else [])
-    title = f"worst hotspots ({len(hot)} in all" + (f"; 95 % intervals; {sum(h['probability'] > 0.975 for h in hot)} exceed their limit with "
+    title = f"worst hotspots ({len(hot)} in all" + (f"; 95 % intervals; {sum(h.get('probability', 0.0) > 0.975 for h in hot)} exceed their limit with "
                                                      "probability > 0.975)" if sure else ")")
     console.print(_rich_table(title, header, show))
 
@@ -235,6 +244,20 @@ def _stack_calibration(config_path):
     from ..calibration.processfile import die_constants
 
     return die_constants(config_path) if config_path else None
+
+
+def _print_at_risk(console, risk) -> None:
+    """A calibrated run: how many windows pass their limit but may exceed it (95 % interval reaching it), the likeliest five."""
+    if risk is None:
+        return
+    if not risk:
+        console.print("no window under its limit has a 95 % interval reaching it (JSON at_risk: [])", highlight=False)
+        return
+    top = "; ".join(f"{h.get('level', '') + ' ' if h.get('level') else ''}{h['kind']} at ({h['x'] * 1e6:.1f}, {h['y'] * 1e6:.1f}) um "
+                    f"{h['value'] * 1e9:.4g} nm, [{h['interval'][0] * 1e9:.4g}, {h['interval'][1] * 1e9:.4g}] nm, p {h['probability']:.3f}"
+                    for h in risk[:5])
+    console.print(f"{len(risk)} window(s) under their limit may exceed it (95 % interval reaches it; JSON at_risk); likeliest: {top}",
+                  highlight=False)
 
 
 def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> dict:

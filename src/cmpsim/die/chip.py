@@ -222,8 +222,13 @@ class StackResult:
 
         levels = [{"name": lv.level, **lv.to_dict()} for lv in self.levels]
         hot = public(self.hotspots())
-        return {"layout": self.top.layout.name, "levels": levels, "spec": dict(self.spec), "hotspot_count": len(hot), "hotspots": hot,
-                "thickness_range": self.top.thickness_range, "units": levels[-1]["units"] | {"thickness_range": "m"}}
+        out = {"layout": self.top.layout.name, "levels": levels, "spec": dict(self.spec), "hotspot_count": len(hot), "hotspots": hot,
+               "thickness_range": self.top.thickness_range, "units": levels[-1]["units"] | {"thickness_range": "m"}}
+        if any("at_risk" in lv for lv in levels):  # a calibration's levels: their windows at risk, all levels
+            out["at_risk"] = [h for lv in levels for h in lv.get("at_risk", [])]
+            out["at_risk_count"] = len(out["at_risk"])
+            out["units"].update(interval="m", probability="1")
+        return out
 
     def dataset(self):
         """The per-window maps of every level as one ``xarray.Dataset`` on (level, y, x)."""

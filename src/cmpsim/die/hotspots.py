@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SPEC_KINDS", "parse_spec", "find_hotspots", "count_hotspots", "write_lyrdb", "write_csv"]
+__all__ = ["SPEC_KINDS", "parse_spec", "find_hotspots", "find_at_risk", "AT_RISK", "count_hotspots", "write_lyrdb", "write_csv"]
 
 #: The quantities a hotspot limit applies to, and what each means.
 SPEC_KINDS = {
@@ -102,6 +102,47 @@ def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: st
                 h["probability"] = float(exceedance_probability(h["value"], sd, limit))
             out.append(h)
     out.sort(key=lambda h: -abs(h["value"]) / h["limit"])
+    return out
+
+
+#: The probability of exceeding its limit from which a window under it is "at risk": its 95 % interval
+#: (value +- 1.96 sigma) reaches the limit (P(X > limit) = 0.025 at value + 1.96 sigma = limit).
+AT_RISK = 0.025
+
+
+def find_at_risk(fields: dict, x, y, cell: float, extent, spec: dict, sigma: dict, level: str | None = None,
+                 threshold: float = AT_RISK) -> list[dict]:
+    """The windows of a calibrated run that are *under* their limit but may exceed it: probability of
+    exceeding (eq. U2) at least ``threshold``, i.e. their 95 % interval reaches the limit. The
+    complement of :func:`find_hotspots` (which lists the windows over it, each with its probability):
+    together they say which windows fail for sure, which only might, and which might although they
+    pass. Same keys as a hotspot (``interval`` [low, high] m, ``probability``); sorted by probability,
+    largest first. Empty without ``sigma``."""
+    from .uncertainty import exceedance_probability
+
+    if not sigma:
+        return []
+    x0, y0, x1, y1 = _window_boxes(np.asarray(x), np.asarray(y), cell, extent)
+    inside = (x1 > x0) & (y1 > y0)
+    out = []
+    for kind, limit in spec.items():
+        v, sd = fields.get(kind), sigma.get(kind)
+        if v is None or sd is None:
+            continue
+        v, sd = np.asarray(v, dtype=float), np.asarray(sd, dtype=float)
+        with np.errstate(invalid="ignore"):
+            under = inside & np.isfinite(v) & (np.abs(v) <= limit) & (sd > 0)
+        p = np.zeros(v.shape)
+        p[under] = exceedance_probability(v[under], sd[under], limit)
+        for iy, ix in zip(*np.nonzero(under & (p >= threshold))):
+            h = {"kind": kind, "x": float(0.5 * (x0[iy, ix] + x1[iy, ix])), "y": float(0.5 * (y0[iy, ix] + y1[iy, ix])),
+                 "value": float(v[iy, ix]), "limit": float(limit),
+                 "box": (float(x0[iy, ix]), float(y0[iy, ix]), float(x1[iy, ix]), float(y1[iy, ix])),
+                 "interval": [float(v[iy, ix] - 1.96 * sd[iy, ix]), float(v[iy, ix] + 1.96 * sd[iy, ix])], "probability": float(p[iy, ix])}
+            if level is not None:
+                h["level"] = level
+            out.append(h)
+    out.sort(key=lambda h: -h["probability"])
     return out
 
 

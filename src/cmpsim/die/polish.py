@@ -124,6 +124,15 @@ class DieResult:
         return find_hotspots(self.fields(), x, y, self.layout.cell_size, self.layout.extent, self.spec if spec is None else spec, self.level,
                              self.sigma)
 
+    def at_risk(self, spec: dict | None = None) -> list[dict]:
+        """A calibrated run's windows under a limit whose 95 % interval reaches it (:func:`cmpsim.die.hotspots.find_at_risk`);
+        empty for an uncalibrated run."""
+        from .hotspots import find_at_risk
+
+        x, y = self.layout.coordinates()
+        return find_at_risk(self.fields(), x, y, self.layout.cell_size, self.layout.extent, self.spec if spec is None else spec,
+                            self.sigma, self.level)
+
     def hotspot_count(self, spec: dict | None = None) -> int:
         """The number of hotspots (windows x quantities over their limits)."""
         from .hotspots import count_hotspots
@@ -226,6 +235,9 @@ class DieResult:
         if self.uncertainty is not None:
             out["uncertainty"] = self.uncertainty.to_dict()
             out["units"].update(interval="m", probability="1")
+            risk = self.at_risk() if self.spec else []
+            out["at_risk"] = public(risk)  # under their limit, but their 95 % interval reaches it
+            out["at_risk_count"] = len(risk)
         return out
 
     def dataset(self):
