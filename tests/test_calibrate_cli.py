@@ -118,6 +118,10 @@ def test_die_config_gives_every_hotspot_an_interval_and_a_probability(calibrated
     assert bad.exit_code == 2 and "--process oxide" in bad.output and not (tmp_path / "x").exists()
     bad = CliRunner().invoke(main, args + ["--config", str(out), "--param", "contact_height=50nm"])
     assert bad.exit_code == 2 and "--param contact_height" in bad.output
+    # a wafer of dies: each die's expected, sure and at-risk counts, said in the terminal
+    wafer = CliRunner().invoke(main, args + ["--config", str(out), "--wafer", "--set", "grid=coarse"])
+    assert wafer.exit_code == 0, wafer.output
+    assert "hotspots expected on the wafer" in wafer.output and "fail for sure" in wafer.output
 
 
 @pytest.mark.slow

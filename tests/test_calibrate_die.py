@@ -239,6 +239,35 @@ def test_windows_under_their_limit_whose_interval_reaches_it_are_listed_at_risk(
     assert plain.at_risk() == [] and "at_risk" not in plain.to_dict()
 
 
+def test_a_calibrated_wafer_of_dies_counts_each_dies_sure_expected_and_at_risk_windows(calibrated_run):
+    """simulate_wafer(uncertainty=) gives every die hotspot_expected, hotspot_sure and at_risk_count, the same
+    numbers as the die polished alone at its blanket rate with the same calibration; the reference die's
+    hotspots carry their intervals."""
+    from cmpsim import Config
+    from cmpsim.die import simulate_wafer
+    from cmpsim.die.hotspots import SURE
+
+    _, unc, _ = calibrated_run
+    cfg = Config.default().replace(grid="coarse")
+    w = simulate_wafer("lines", process="copper", config=cfg, spec={"dishing": "100 nm"}, cell_size=200e-6, uncertainty=unc)
+    d = w.to_dict()
+    assert w.reading == "exact" and "interval" in d["hotspots"][0]
+    assert d["wafer_hotspot_expected"] == pytest.approx(float(np.sum(w.hotspot_expected)))
+    i = int(np.argmin(w.blanket_rate))
+    alone = simulate("lines", w.time, process="copper", config=cfg, blanket_rate=float(w.blanket_rate[i]), cell_size=200e-6,
+                     spec={"dishing": "100 nm"}, uncertainty=unc)
+    hot = alone.hotspots()
+    assert w.hotspot_count[i] == len(hot)
+    assert w.hotspot_sure[i] == sum(h["probability"] > SURE for h in hot) and w.at_risk_count[i] == len(alone.at_risk())
+    v, sd = alone.fields()["dishing"], alone.sigma["dishing"]
+    ok = np.isfinite(v)
+    assert w.hotspot_expected[i] == pytest.approx(float(np.sum(exceedance_probability(v[ok], sd[ok], 100e-9))), rel=1e-12)
+    assert w.hotspot_expected[i] > sum(h["probability"] for h in hot)  # windows under the limit add their small chances
+    assert d["dies"][i]["hotspot_sure"] == w.hotspot_sure[i] and d["units"]["hotspot_expected"] == "1"
+    plain = simulate_wafer("lines", process="copper", config=cfg, spec={"dishing": "100 nm"}, cell_size=200e-6)
+    assert plain.hotspot_expected is None and "hotspot_expected" not in plain.to_dict()["dies"][0]
+
+
 @pytest.mark.slow
 def test_linearisation_agrees_with_a_sample_of_the_covariance(calibrated_run):
     """sigma of the worst window by linearisation against 200 draws of the covariance (within 20 %: the sample's

@@ -185,6 +185,7 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
         end = ("clear", result.time_to_clear) if d["time_to_clear"] is not None else ("planarize", result.time_to_planarize)
         console.print(f"{len(result.x)} dies; blanket rate {np.min(result.blanket_rate) * 6e10:.4g}-{np.max(result.blanket_rate) * 6e10:.4g} nm/min; "
                       f"time to {end[0]} {np.nanmin(end[1]):.1f}-{np.nanmax(end[1]):.1f} s", highlight=False)
+        _print_wafer_risk(console, result)
     if out_dir:
         console.print("wrote " + ", ".join(str(p) for p in written), highlight=False)
 
@@ -216,6 +217,7 @@ def _print_layout_run(console, result, is_stack: bool, wafer: bool) -> None:
         console.print(f"{len(result.x)} dies ({result.reading} reading); blanket rate {np.min(result.blanket_rate) * 6e10:.4g}-"
                       f"{np.max(result.blanket_rate) * 6e10:.4g} nm/min; hotspots per die {int(np.min(result.hotspot_count))}-"
                       f"{int(np.max(result.hotspot_count))}, {int(np.sum(result.hotspot_count))} on the wafer", highlight=False)
+        _print_wafer_risk(console, result)
 
 
 def _print_hotspots(console, hot) -> None:
@@ -246,6 +248,17 @@ def _stack_calibration(config_path):
     return die_constants(config_path) if config_path else None
 
 
+def _print_wafer_risk(console, result) -> None:
+    """A calibrated wafer of dies: expected hotspots, sure ones and windows at risk, over the wafer."""
+    import numpy as np
+
+    if getattr(result, "hotspot_expected", None) is None:
+        return
+    console.print(f"calibrated: {np.sum(result.hotspot_expected):.1f} hotspots expected on the wafer, {int(np.sum(result.hotspot_sure))} "
+                  f"fail for sure (probability > 0.975), {int(np.sum(result.at_risk_count))} windows under their limit at risk; "
+                  f"dies with a sure hotspot: {int(np.count_nonzero(result.hotspot_sure))} of {len(result.x)}", highlight=False)
+
+
 def _print_at_risk(console, risk) -> None:
     """A calibrated run: how many windows pass their limit but may exceed it (95 % interval reaching it), the likeliest five."""
     if risk is None:
@@ -269,9 +282,5 @@ def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> d
         return kwargs
     if stack_path:
         return kwargs  # a stack applies them level by level, to the levels of their process (simulate_stack(calibration=))
-    if wafer and dc.uncertainty is not None:
-        from .group import _warn
-
-        _warn("--wafer: the calibrated die constants apply; their intervals do not (a wafer of dies does not carry the covariance yet)")
-    return apply_die_constants(kwargs, dc, given=tuple(parse_assignments(params)), with_uncertainty=not wafer)
+    return apply_die_constants(kwargs, dc, given=tuple(parse_assignments(params)))
 

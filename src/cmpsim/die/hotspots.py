@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["SPEC_KINDS", "parse_spec", "find_hotspots", "find_at_risk", "AT_RISK", "count_hotspots", "write_lyrdb", "write_csv"]
+__all__ = ["SPEC_KINDS", "parse_spec", "find_hotspots", "find_at_risk", "AT_RISK", "SURE", "risk_counts", "count_hotspots", "write_lyrdb", "write_csv"]
 
 #: The quantities a hotspot limit applies to, and what each means.
 SPEC_KINDS = {
@@ -108,6 +108,33 @@ def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: st
 #: The probability of exceeding its limit from which a window under it is "at risk": its 95 % interval
 #: (value +- 1.96 sigma) reaches the limit (P(X > limit) = 0.025 at value + 1.96 sigma = limit).
 AT_RISK = 0.025
+#: The probability over which a hotspot fails "for sure": its whole 95 % interval is over the limit.
+SURE = 0.975
+
+
+def risk_counts(fields: dict, sigma: dict, x, y, cell: float, extent, spec: dict) -> tuple[float, int, int]:
+    """(expected number of windows x quantities over their limits, the sum of every window's probability
+    of exceeding (eq. U2); hotspots that fail for sure, probability > :data:`SURE`; windows at risk, as
+    :func:`find_at_risk`) of a calibrated die: what a wafer of dies reports per die."""
+    from .uncertainty import exceedance_probability
+
+    x0, y0, x1, y1 = _window_boxes(np.asarray(x), np.asarray(y), cell, extent)
+    inside = (x1 > x0) & (y1 > y0)
+    expected, sure, risk = 0.0, 0, 0
+    for kind, limit in spec.items():
+        v, sd = fields.get(kind), sigma.get(kind)
+        if v is None or sd is None:
+            continue
+        v, sd = np.asarray(v, dtype=float), np.asarray(sd, dtype=float)
+        with np.errstate(invalid="ignore"):
+            ok = inside & np.isfinite(v)
+            over = ok & (np.abs(v) > limit)
+        p = np.zeros(v.shape)
+        p[ok] = exceedance_probability(v[ok], sd[ok], limit)
+        expected += float(np.sum(p))
+        sure += int(np.count_nonzero(over & (p > SURE)))
+        risk += int(np.count_nonzero(ok & ~over & (sd > 0) & (p >= AT_RISK)))
+    return expected, sure, risk
 
 
 def find_at_risk(fields: dict, x, y, cell: float, extent, spec: dict, sigma: dict, level: str | None = None,

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["DieUncertainty", "exceedance_probability", "window_sigma"]
+__all__ = ["DieUncertainty", "exceedance_probability", "window_sigma", "perturbations", "sigma_from_differences"]
 
 
 @dataclass(frozen=True)
@@ -81,20 +81,23 @@ def exceedance_probability(value, sigma, limit):
     return np.clip(np.where(s > 0, p, (np.abs(v) > lim).astype(float)), 0.0, 1.0)
 
 
-def window_sigma(evaluate, uncertainty: DieUncertainty) -> dict:
-    """sigma (m) of every field that ``evaluate(values) -> {kind: (ny, nx) array}`` returns (eq. U1).
-
-    ``values`` is a dict name -> SI value of the constants of ``uncertainty``.
-    """
+def perturbations(uncertainty: DieUncertainty) -> list[tuple[dict, dict, float]]:
+    """The central differences of eq. U1: per constant k, (values with theta_k x exp(+d), values with
+    theta_k x exp(-d), d), d = max(sigma_k, 1e-3) in ln theta; values: name -> SI of every constant."""
     names = list(uncertainty.names)
     base = dict(zip(names, uncertainty.values))
     se = uncertainty.stderr_log
-    grads: list[dict] = []
+    out = []
     for k, n in enumerate(names):
         d = max(float(se[k]), 1e-3)
-        up = evaluate({**base, n: base[n] * math.exp(d)})
-        dn = evaluate({**base, n: base[n] * math.exp(-d)})
-        grads.append({kind: (np.nan_to_num(up[kind]) - np.nan_to_num(dn[kind])) / (2 * d) for kind in up})
+        out.append(({**base, n: base[n] * math.exp(d)}, {**base, n: base[n] * math.exp(-d)}, d))
+    return out
+
+
+def sigma_from_differences(pairs, uncertainty: DieUncertainty) -> dict:
+    """sigma (m) of every field (eq. U1) from ``pairs`` [(fields up, fields down, d), ...] in the order of
+    :func:`perturbations` (fields: kind -> array). A field undefined (NaN) on a side counts as 0 there."""
+    grads = [{kind: (np.nan_to_num(up[kind]) - np.nan_to_num(dn[kind])) / (2 * d) for kind in up} for up, dn, d in pairs]
     out = {}
     kinds = grads[0].keys() if grads else []
     for kind in kinds:
@@ -102,3 +105,11 @@ def window_sigma(evaluate, uncertainty: DieUncertainty) -> dict:
         var = np.einsum("...i,ij,...j->...", g, uncertainty.covariance, g)
         out[kind] = np.sqrt(np.clip(var, 0.0, None))
     return out
+
+
+def window_sigma(evaluate, uncertainty: DieUncertainty) -> dict:
+    """sigma (m) of every field that ``evaluate(values) -> {kind: (ny, nx) array}`` returns (eq. U1).
+
+    ``values`` is a dict name -> SI value of the constants of ``uncertainty``.
+    """
+    return sigma_from_differences([(evaluate(up), evaluate(dn), d) for up, dn, d in perturbations(uncertainty)], uncertainty)

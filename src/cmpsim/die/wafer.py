@@ -13,7 +13,7 @@ import numpy as np
 from .evolution import DieEvolution
 from .stacks import film_stack
 from .process import DieProcess
-from .polish import DieResult, WAFER_OUTPUTS, _at, _cf_dataset, _conventions, _end_point, _finite, _max, _prepare
+from .polish import DieResult, WAFER_OUTPUTS, _at, _cf_dataset, _conventions, _end_point, _finite, _fitted, _max, _prepare, _weighting, _with_sigma
 
 __all__ = ["die_sites", "blanket_rates", "WaferDies", "WAFER_EXACT_DIES", "simulate_wafer"]
 
@@ -62,6 +62,11 @@ class WaferDies:
     hotspot_count: np.ndarray = field(default=None, repr=False)
     #: how the dies were read: "exact" (each at its own equivalent time) or "sampled" (interpolated between sampled times)
     reading: str = "exact"
+    #: a calibrated run (``uncertainty=``): per die the expected number of hotspots, those that fail for sure and the
+    #: windows at risk (:func:`cmpsim.die.hotspots.risk_counts`); None otherwise
+    hotspot_expected: np.ndarray | None = field(default=None, repr=False)
+    hotspot_sure: np.ndarray | None = field(default=None, repr=False)
+    at_risk_count: np.ndarray | None = field(default=None, repr=False)
 
     def to_dict(self) -> dict:
         """The object of ``cmpsim die --wafer --json``: the die at the reference rate plus the list ``dies``."""
@@ -78,12 +83,18 @@ class WaferDies:
                                                        self.hotspot_count)
         ]
         out["wafer_hotspot_count"] = int(np.sum(self.hotspot_count))
+        if self.hotspot_expected is not None:
+            for d, e, s, r in zip(out["dies"], self.hotspot_expected, self.hotspot_sure, self.at_risk_count):
+                d.update(hotspot_expected=float(e), hotspot_sure=int(s), at_risk_count=int(r))
+            out["wafer_hotspot_expected"] = float(np.sum(self.hotspot_expected))
+            out["units"].update({k: u for k, (u, _) in WAFER_RISK_OUTPUTS.items()})
         return out
 
     def dataset(self):
         """The dies as an ``xarray.Dataset`` on the ``die`` dimension (CF attributes)."""
-        vars_ = {name: getattr(self, name) for name in WAFER_OUTPUTS}
-        return _cf_dataset(("die",), vars_, WAFER_OUTPUTS, {"time": self.time}, {},
+        table = dict(WAFER_OUTPUTS) | (WAFER_RISK_OUTPUTS if self.hotspot_expected is not None else {})
+        vars_ = {name: getattr(self, name) for name in table}
+        return _cf_dataset(("die",), vars_, table, {"time": self.time}, {},
                            f"cmpsim die --wafer: {self.die.layout.name}, {self.die.process.kind}")
 
     def plot(self):
@@ -122,13 +133,20 @@ class WaferDies:
         return fig
 
 
+#: The per-die outputs of a calibrated wafer (:class:`WaferDies`), name -> (unit, long name).
+WAFER_RISK_OUTPUTS = {
+    "hotspot_expected": ("1", "expected number of hotspots on the die (sum of every window's probability of exceeding its limit)"),
+    "hotspot_sure": ("1", "hotspots on the die that fail for sure (probability > 0.975)"),
+    "at_risk_count": ("1", "windows under their limit whose 95 % interval reaches it"),
+}
+
 #: Up to this many dies, each die is read at its own equivalent time; beyond, at this many equally spaced times, interpolated.
 WAFER_EXACT_DIES = 400
 
 
 def simulate_wafer(layout, time: float | None = None, *, config=None, result=None, process=None, planarization_length: float | None = None,
                    weighting: str = "gaussian", cell_size: float | None = None, feature_contact: str = "elastic", spec=None,
-                   **process_values) -> WaferDies:
+                   uncertainty=None, **process_values) -> WaferDies:
     """Polish every die of a wafer (docs/model.md, section 18.7).
 
     One wafer solve (``result``, or ``cmpsim.solve(config)``) gives the blanket rate at each die
@@ -138,7 +156,10 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     ``hotspot_count``. Up to :data:`WAFER_EXACT_DIES` dies each is read at its own equivalent
     time; a wafer of more (small dies) is read at that many equally spaced equivalent times and
     each die's values interpolated linearly between them (``reading = "sampled"``; hotspot counts
-    rounded). Other arguments as :func:`simulate`.
+    rounded). ``uncertainty`` (a calibration's :class:`cmpsim.die.uncertainty.DieUncertainty`) applies
+    its constants and gives every die ``hotspot_expected``, ``hotspot_sure`` and ``at_risk_count``
+    (:func:`cmpsim.die.hotspots.risk_counts`; 2p more die evolutions run in step with the reference
+    die, p the constants) and the reference die's hotspots their intervals. Other arguments as :func:`simulate`.
     """
     from .hotspots import parse_spec
 
@@ -150,6 +171,7 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
         want = film_stack(DieProcess(kind=kind)).film
         if getattr(result.config, "film", want) != want:
             raise ValueError(f"the {kind} process needs the blanket rate of film = {want!r}; the result was solved for film = {result.config.film!r}")
+    process, planarization_length, process_values = _fitted(uncertainty, process, planarization_length, process_values)
     config, layout, process, w, derived, eff, fc = _prepare(layout, config if result is None else result.config, process,
                                                             planarization_length, weighting, cell_size, feature_contact, **process_values)
     if result is None:
@@ -174,21 +196,61 @@ def simulate_wafer(layout, time: float | None = None, *, config=None, result=Non
     reading = "exact" if n <= WAFER_EXACT_DIES else "sampled"
     times = t_equiv[order] if reading == "exact" else np.linspace(t_equiv[order[0]], t_equiv[order[-1]], WAFER_EXACT_DIES)
     probe = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev, {}, feature_contact, spec)
-    vals = np.empty((len(times), 5))
+    twins = _twins(uncertainty, layout, process, config, weighting, w.length, k_ref, fc) if uncertainty is not None and spec else None
+    columns = 5 if twins is None else 8
+    vals = np.empty((len(times), columns))
     for j, t in enumerate(times):
         ev.advance_to(float(t))
         vals[j, :3] = [np.nan if v is None else v for v in (_max(ev.dishing), _max(ev.erosion), _max(ev.step_height))]
         vals[j, 3] = probe.thickness_range
         vals[j, 4] = probe.hotspot_count()
+        if twins is not None:
+            vals[j, 5:] = _risk(probe, twins, float(t), uncertainty)
     if reading == "exact":
-        per_die = np.empty((n, 5))
+        per_die = np.empty((n, columns))
         per_die[order] = vals
     else:
-        per_die = np.stack([np.interp(t_equiv, times, vals[:, c]) for c in range(5)], axis=1)
+        per_die = np.stack([np.interp(t_equiv, times, vals[:, c]) for c in range(columns)], axis=1)
         per_die[:, 4] = np.rint(per_die[:, 4])
+        if twins is not None:
+            per_die[:, 6:] = np.rint(per_die[:, 6:])
     dish, ero, step, trange, hot = (per_die[:, c] for c in range(5))
     # event times scale back with the rate; events after the reference die's last time are not known
     tc = ev.t_clear.max() * k_ref / k
     tp = ev.t_planar.max() * k_ref / k
     die = DieResult(layout, process, float(ev.t), k_ref, w.length, derived, weighting, eff, ev, _conventions(config), feature_contact, spec)
-    return WaferDies(die, result, float(time), x, y, k, tc, tp, dish, ero, step, trange, hot.astype(int), reading)
+    die = _with_sigma(die, config, fc, None, uncertainty)
+    risk = (None, None, None) if twins is None else (per_die[:, 5], per_die[:, 6].astype(int), per_die[:, 7].astype(int))
+    return WaferDies(die, result, float(time), x, y, k, tc, tp, dish, ero, step, trange, hot.astype(int), reading, *risk)
+
+
+def _twins(uncertainty, layout, process, config, weighting, length, k_ref, fc):
+    """The die evolutions of eq. U1's central differences, [(up, down, d), ...] (:func:`cmpsim.die.uncertainty.perturbations`),
+    each from a fresh die at the reference rate, to be advanced in step with the reference die."""
+    from .density import effective_density
+    from .uncertainty import perturbations
+
+    if weighting == "pad" and "planarization_length" in uncertainty.names:
+        raise ValueError("weighting = 'pad' takes its length from the pad stack: a calibrated planarization_length needs 'gaussian' or 'elliptic'")
+
+    def evolution(values):
+        values = dict(values)
+        wt, _ = _weighting(config, None if weighting == "pad" else values.pop("planarization_length", length), weighting)
+        return DieEvolution(layout, process.replace(**values), effective_density(layout.density, layout.cell_size, wt), k_ref,
+                            config.asperity_radius, fc)
+
+    return [(evolution(up), evolution(dn), d) for up, dn, d in perturbations(uncertainty)]
+
+
+def _risk(probe: DieResult, twins, t: float, uncertainty) -> tuple[float, int, int]:
+    """(expected hotspots, sure, at risk) of the reference die ``probe`` at time ``t`` (s), the twins advanced to it."""
+    from .hotspots import risk_counts
+    from .uncertainty import sigma_from_differences
+
+    def fields(ev):
+        ev.advance_to(t)
+        return {"thickness": ev.thickness, "step_height": ev.step_height, "dishing": ev.dishing, "erosion": ev.erosion}
+
+    sigma = sigma_from_differences([(fields(up), fields(dn), d) for up, dn, d in twins], uncertainty)
+    x, y = probe.layout.coordinates()
+    return risk_counts(probe.fields(), sigma, x, y, probe.layout.cell_size, probe.layout.extent, probe.spec)
