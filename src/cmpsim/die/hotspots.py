@@ -112,15 +112,14 @@ AT_RISK = 0.025
 SURE = 0.975
 
 
-def risk_counts(fields: dict, sigma: dict, x, y, cell: float, extent, spec: dict) -> tuple[float, int, int]:
-    """(expected number of windows x quantities over their limits, the sum of every window's probability
-    of exceeding (eq. U2); hotspots that fail for sure, probability > :data:`SURE`; windows at risk, as
-    :func:`find_at_risk`) of a calibrated die: what a wafer of dies reports per die."""
+def _graded(fields: dict, sigma: dict, x, y, cell: float, extent, spec: dict):
+    """Per quantity with a limit and a sigma: (kind, limit, value, sigma, over, under, probability of
+    exceeding (eq. U2), window boxes): ``over``/``under`` the windows inside the die with a finite value
+    over / at most their limit (arrays (ny, nx))."""
     from .uncertainty import exceedance_probability
 
     x0, y0, x1, y1 = _window_boxes(np.asarray(x), np.asarray(y), cell, extent)
     inside = (x1 > x0) & (y1 > y0)
-    expected, sure, risk = 0.0, 0, 0
     for kind, limit in spec.items():
         v, sd = fields.get(kind), sigma.get(kind)
         if v is None or sd is None:
@@ -131,9 +130,18 @@ def risk_counts(fields: dict, sigma: dict, x, y, cell: float, extent, spec: dict
             over = ok & (np.abs(v) > limit)
         p = np.zeros(v.shape)
         p[ok] = exceedance_probability(v[ok], sd[ok], limit)
+        yield kind, float(limit), v, sd, over, ok & ~over, p, (x0, y0, x1, y1)
+
+
+def risk_counts(fields: dict, sigma: dict, x, y, cell: float, extent, spec: dict) -> tuple[float, int, int]:
+    """(expected number of windows x quantities over their limits, the sum of every window's probability
+    of exceeding (eq. U2); hotspots that fail for sure, probability > :data:`SURE`; windows at risk, as
+    :func:`find_at_risk`) of a calibrated die: what a wafer of dies reports per die."""
+    expected, sure, risk = 0.0, 0, 0
+    for _, _, _, sd, over, under, p, _ in _graded(fields, sigma, x, y, cell, extent, spec):
         expected += float(np.sum(p))
         sure += int(np.count_nonzero(over & (p > SURE)))
-        risk += int(np.count_nonzero(ok & ~over & (sd > 0) & (p >= AT_RISK)))
+        risk += int(np.count_nonzero(under & (sd > 0) & (p >= AT_RISK)))
     return expected, sure, risk
 
 
@@ -145,25 +153,13 @@ def find_at_risk(fields: dict, x, y, cell: float, extent, spec: dict, sigma: dic
     together they say which windows fail for sure, which only might, and which might although they
     pass. Same keys as a hotspot (``interval`` [low, high] m, ``probability``); sorted by probability,
     largest first. Empty without ``sigma``."""
-    from .uncertainty import exceedance_probability
-
     if not sigma:
         return []
-    x0, y0, x1, y1 = _window_boxes(np.asarray(x), np.asarray(y), cell, extent)
-    inside = (x1 > x0) & (y1 > y0)
     out = []
-    for kind, limit in spec.items():
-        v, sd = fields.get(kind), sigma.get(kind)
-        if v is None or sd is None:
-            continue
-        v, sd = np.asarray(v, dtype=float), np.asarray(sd, dtype=float)
-        with np.errstate(invalid="ignore"):
-            under = inside & np.isfinite(v) & (np.abs(v) <= limit) & (sd > 0)
-        p = np.zeros(v.shape)
-        p[under] = exceedance_probability(v[under], sd[under], limit)
-        for iy, ix in zip(*np.nonzero(under & (p >= threshold))):
+    for kind, limit, v, sd, _, under, p, (x0, y0, x1, y1) in _graded(fields, sigma, x, y, cell, extent, spec):
+        for iy, ix in zip(*np.nonzero(under & (sd > 0) & (p >= threshold))):
             h = {"kind": kind, "x": float(0.5 * (x0[iy, ix] + x1[iy, ix])), "y": float(0.5 * (y0[iy, ix] + y1[iy, ix])),
-                 "value": float(v[iy, ix]), "limit": float(limit),
+                 "value": float(v[iy, ix]), "limit": limit,
                  "box": (float(x0[iy, ix]), float(y0[iy, ix]), float(x1[iy, ix]), float(y1[iy, ix])),
                  "interval": [float(v[iy, ix] - 1.96 * sd[iy, ix]), float(v[iy, ix] + 1.96 * sd[iy, ix])], "probability": float(p[iy, ix])}
             if level is not None:
