@@ -206,7 +206,10 @@ def _seams(blocks: dict[BlockKey, Block], placements, grid: WindowGrid, canvas: 
         return
     every = Segments.concat(parts)
     net = cancel_axis(every)
-    if len(net) == len(every):
+    # nothing cancelled: the same total length (integer dbu: exact). Not the count: a piece that cancels
+    # part of a longer one leaves as many pieces as there were (a random hierarchy found it: two
+    # placements abutting on a stretch where another layer's edge meets the border)
+    if np.sum(np.hypot(*(net.b - net.a).T)) == np.sum(np.hypot(*(every.b - every.a).T)):
         return
     xs, ys = grid.xs(), grid.ys()
     _, before = rasterise_lines(every, xs, ys, area=False)
