@@ -110,3 +110,15 @@ def test_a_window_off_the_database_unit_names_window(tmp_path):
     with pytest.raises(ValueError, match=r"--window = 5.002e-06 m is not a whole number of database units: it must be a multiple .* 5e-09 m"):
         extract_levels(path, ["1/0"], 5.002 * UM)
     assert extract_windows(path, "1/0", 5 * UM).density.shape == (10, 10)
+
+
+def test_a_stack_level_without_its_layers_is_named(tmp_path):
+    """A stack whose second level names a layer the file lacks: the message names the level (the stack
+    file's name for it, else its number), not only the layer."""
+    ly = kdb.Layout()
+    ly.create_cell("TOP").shapes(ly.layer(1, 0)).insert(kdb.Box(0, 0, 10000, 10000))
+    path = _write(ly, tmp_path / "one_layer.gds")
+    with pytest.raises(ValueError, match=r"^level 'm2' of 2: --layer '99/0' \(99/0\) is not in one_layer.gds; its layers are: 1/0"):
+        extract_levels(path, ["1/0", "99/0"], 5 * UM, names=["m1", "m2"])
+    with pytest.raises(ValueError, match=r"^level 2 of 2: --layer '99/0'"):
+        extract_levels(path, ["1/0", "99/0"], 5 * UM)

@@ -369,7 +369,7 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
 
     specs = [list(lv.layers) if isinstance(lv.layers, tuple) else lv.layers for lv in levels]
     dies = [Layout.from_windows(w) for w in extract_levels(layout, specs, window, top=top, pdk=pdk, layer_map=layer_map,
-                                                           progress=progress)]
+                                                           progress=progress, names=[lv.name for lv in levels])]
     config = _config(config)
     rates: dict[str, float] = {}
     out, incoming = [], None

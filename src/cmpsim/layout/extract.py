@@ -197,14 +197,22 @@ def extract_windows(layout: Layout | str | os.PathLike, layers, window: float, *
 
 def extract_levels(layout: Layout | str | os.PathLike, levels, window: float, *, top: str | None = None,
                    pdk: str | None = None, layer_map=None, origin: tuple[float, float] | None = None,
-                   big: int | None = None, progress=None) -> list[LayoutWindows]:
+                   big: int | None = None, progress=None, names=None) -> list[LayoutWindows]:
     """:func:`extract_windows` for several levels (each a layer spec or a list of them) on one
     read of the file, one window grid and one store of KLayout's hierarchy. Every level's
-    layers are checked before any is extracted."""
+    layers are checked before any is extracted; a level whose layers are missing or empty is
+    named in the message (``names``: the levels' names, e.g. a stack file's, else their numbers)."""
     if not isinstance(layout, Layout):
         layout = read_layout(layout)
     cell = top_cell(layout, top)
-    all_pairs = [_pairs(layout, cell, spec, pdk, layer_map) for spec in levels]
+    levels = list(levels)
+    names = [str(k + 1) for k in range(len(levels))] if names is None else [repr(str(n)) for n in names]
+    all_pairs = []
+    for name, spec in zip(names, levels):
+        try:
+            all_pairs.append(_pairs(layout, cell, spec, pdk, layer_map))
+        except ValueError as exc:
+            raise ValueError(f"level {name} of {len(levels)}: {exc}") from None
     grid, box = _grid(layout, cell, window, origin)
     out = []
     for k, pairs in enumerate(all_pairs):
