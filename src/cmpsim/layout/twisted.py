@@ -27,7 +27,10 @@ def _zero_area_cells(db: kdb.Layout):
             shapes = cell.shapes(li)
             if shapes.is_empty():
                 continue
-            raw = kdb.Region(shapes)
+            own = cell.begin_shapes_rec(li)
+            own.max_depth = 0  # the cell's own shapes
+            own.shape_flags = kdb.Shapes.SPolygons  # boxes and paths never twist
+            raw = kdb.Region(own)
             raw.merged_semantics = False  # areas of the polygons as drawn, not of their merge
             if not raw.with_area(0, 1, False).is_empty():
                 yield cell, li
