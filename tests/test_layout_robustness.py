@@ -122,3 +122,18 @@ def test_a_stack_level_without_its_layers_is_named(tmp_path):
         extract_levels(path, ["1/0", "99/0"], 5 * UM, names=["m1", "m2"])
     with pytest.raises(ValueError, match=r"^level 2 of 2: --layer '99/0'"):
         extract_levels(path, ["1/0", "99/0"], 5 * UM)
+
+
+def test_a_recursive_hierarchy_is_named(tmp_path):
+    """A corrupt file whose cell A places B and B places A: refused naming the recursion (KLayout's own words were an internal
+    error about a topological sort)."""
+    gdstk = pytest.importorskip("gdstk")  # KLayout will not write such a file
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+    a, b, top = lib.new_cell("A"), lib.new_cell("B"), lib.new_cell("TOP")
+    a.add(gdstk.rectangle((0, 0), (10, 10), layer=1), gdstk.Reference("B", (20, 0)))
+    b.add(gdstk.rectangle((0, 0), (5, 5), layer=1), gdstk.Reference("A", (0, 20)))
+    top.add(gdstk.Reference("A", (0, 0)))
+    path = tmp_path / "recursive.gds"
+    lib.write_gds(str(path))
+    with pytest.raises(ValueError, match=r"recursive.gds' has a recursive cell hierarchy \(a cell placed inside itself"):
+        read_layout(path)

@@ -103,6 +103,9 @@ def read_layout(path: str | os.PathLike) -> Layout:
         if "bad_alloc" in msg or "memory" in msg.lower():
             raise LayoutTooLarge(f"layout path {str(p)!r} does not fit in this machine's memory ({msg.strip()}); "
                                  "cut the region of interest out of it or use a larger machine") from None
+        if "topological_sort" in msg:  # KLayout's words for a cell that places itself, directly or through others
+            raise ValueError(f"layout path {str(p)!r} has a recursive cell hierarchy (a cell placed inside itself, directly or through "
+                             f"other cells), which no layout tool can flatten; KLayout: {msg.strip()}") from None
         raise ValueError(f"layout path {str(p)!r} could not be read as a layout ({msg.strip()}): {_WHAT}") from None
     untwist(db)  # bow-ties: KLayout's deep merge would lose them, its flat merge keeps them
     # KLayout keeps the unit in micrometres (0.001): read as a decimal, 1e-9 m stays exactly 1e-9
