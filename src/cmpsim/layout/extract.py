@@ -103,7 +103,8 @@ def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]
 def _grid(layout: Layout, cell, window: float, origin) -> tuple[WindowGrid, tuple[int, int, int, int]]:
     dbu = layout.dbu
     if not (isinstance(window, (int, float)) and window > 0 and math.isfinite(window)):
-        raise ValueError(f"window = {window!r} must be a positive length in metres (--window)")
+        shown = f"{window:g}" if isinstance(window, (int, float)) else repr(window)
+        raise ValueError(f"window = {shown} must be a positive length in metres (--window)")
     w = dbu_count(window, dbu, "--window")
     box = cell.bbox()
     if box.empty():
