@@ -244,12 +244,13 @@ def test_a_wafer_of_layout_dies_reports_hotspots_per_die(tmp_path):
 
 
 # ---------------------------------------------------------------------------- bad input
-@pytest.mark.parametrize("case", ["not_a_layout", "missing_layer", "empty_layer", "window_too_large", "unknown_process", "no_layer"])
+@pytest.mark.parametrize("case", ["not_a_layout", "missing_layer", "empty_layer", "window_too_large", "unknown_process", "no_layer",
+                                  "stack_layer_map_missing", "stack_level_layer_missing"])
 def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, tmp_path, case):
     args = ["die", str(chip), "--layer", "1/0", "--blanket-rate", "100nm/min"]
     expect = {"not_a_layout": "not a layout", "missing_layer": "'7/0'", "empty_layer": "empty layer",
               "window_too_large": "larger than the die", "unknown_process": "unknown process 'tungsten'",
-              "no_layer": "--layer"}[case]
+              "no_layer": "--layer", "stack_layer_map_missing": "layer_map", "stack_level_layer_missing": "level 'm2' of 2: --layer '7/0'"}[case]
     if case == "not_a_layout":
         bad = tmp_path / "text.gds"
         bad.write_text("hello, not GDSII\n")
@@ -274,6 +275,13 @@ def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, 
         args = ["die", str(chip), "--stack", str(st), "--blanket-rate", "100nm/min"]
     elif case == "no_layer":
         args = args[:2] + args[4:]
+    elif case.startswith("stack_"):  # a stack's layer map that is not there (was a traceback), a level's layer the chip lacks
+        st = tmp_path / "s.toml"
+        second = "m2" if case == "stack_layer_map_missing" else "7/0"
+        st.write_text(f'[[level]]\nname = "m1"\nlayers = ["1/0"]\nprocess = "oxide"\n[[level]]\nname = "m2"\nlayers = ["{second}"]\nprocess = "oxide"\n')
+        args = ["die", str(chip), "--stack", str(st), "--blanket-rate", "100nm/min"]
+        if case == "stack_layer_map_missing":
+            args += ["--layer-map", str(tmp_path / "no_such_map.toml")]
     out = tmp_path / "never"
     res = CliRunner().invoke(main, args + ["--out", str(out)])
     assert res.exit_code == 2, res.output

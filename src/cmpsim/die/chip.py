@@ -368,8 +368,12 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
     from ..layout import extract_levels
 
     specs = [list(lv.layers) if isinstance(lv.layers, tuple) else lv.layers for lv in levels]
-    dies = [Layout.from_windows(w) for w in extract_levels(layout, specs, window, top=top, pdk=pdk, layer_map=layer_map,
-                                                           progress=progress)]
+    try:
+        extracted = extract_levels(layout, specs, window, top=top, pdk=pdk, layer_map=layer_map, progress=progress,
+                                   names=[lv.name for lv in levels])
+    except FileNotFoundError as exc:  # a layer map that is not there: bad input, as in layout_die
+        raise ValueError(str(exc)) from None
+    dies = [Layout.from_windows(w) for w in extracted]
     config = _config(config)
     rates: dict[str, float] = {}
     out, incoming = [], None

@@ -29,7 +29,7 @@ import numpy as np
 
 from .segments import Segments, rasterise_lines
 
-__all__ = ["Block", "merged_region", "edges_to_segments", "grid_rasters", "border_segments"]
+__all__ = ["Block", "merged_region", "edges_to_segments", "grid_rasters", "border_segments", "fits_klayout", "COORD_LIMIT"]
 
 
 def merged_region(cell: kdb.Cell, layer_indexes, store: kdb.DeepShapeStore | None = None, *,
@@ -81,13 +81,31 @@ def _ortho_and_oblique(edges: kdb.Edges) -> tuple[kdb.Edges, kdb.Edges]:
     return ortho, oblique
 
 
+#: KLayout's coordinates are 32-bit integers: [-COORD_LIMIT, COORD_LIMIT - 1] dbu.
+COORD_LIMIT = 2**31
+
+
+def fits_klayout(x0: int, y0: int, x1: int, y1: int, margin: int = 2) -> bool:
+    """Whether the box (dbu) grown by ``margin`` lies inside KLayout's 32-bit coordinates."""
+    return min(x0, y0) - margin >= -COORD_LIMIT and max(x1, y1) + margin <= COORD_LIMIT - 1
+
+
 def grid_rasters(region: kdb.Region, origin: tuple[int, int], window: int, nx: int, ny: int):
     """Area (dbu^2) and boundary length (dbu) of a merged region per window of a square grid.
 
     Window [j, i] is [ox + i w, ox + (i+1) w] x [oy + j w, oy + (j+1) w]. Exact (see the module).
+    A grid, or shapes, reaching past KLayout's 32-bit coordinates (a die drawn near +-2**31 dbu:
+    KLayout's rasteriser would overflow and read zero) are integrated from the outline instead
+    (:func:`.segments.rasterise_lines`, exact as well).
     """
     if region.is_empty() or nx <= 0 or ny <= 0:
         return np.zeros((max(ny, 0), max(nx, 0))), np.zeros((max(ny, 0), max(nx, 0)))
+    bb = region.bbox()
+    if not (fits_klayout(int(origin[0]), int(origin[1]), int(origin[0]) + nx * int(window), int(origin[1]) + ny * int(window))
+            and fits_klayout(bb.left, bb.bottom, bb.right, bb.top)):
+        xs = int(origin[0]) + np.arange(nx + 1, dtype=float) * int(window)
+        ys = int(origin[1]) + np.arange(ny + 1, dtype=float) * int(window)
+        return rasterise_lines(edges_to_segments(region.edges()), xs, ys)
     o = kdb.Point(int(origin[0]), int(origin[1]))
     step = kdb.Vector(int(window), int(window))
     area = np.asarray(region.rasterize(o, step, nx, ny), dtype=float)

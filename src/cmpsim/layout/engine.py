@@ -29,7 +29,7 @@ from typing import Callable
 import klayout.db as kdb
 import numpy as np
 
-from .blocks import Block, grid_rasters, merged_region
+from .blocks import COORD_LIMIT, Block, grid_rasters, merged_region
 from .hierarchy import BIG, BlockKey, Plan, block_box, overlap_zones, placed_boxes, plan
 from .segments import Segments, cancel_axis, rasterise_lines, window_lines
 
@@ -246,7 +246,9 @@ def _recompute(top: kdb.Cell, layer_indexes, mask: np.ndarray, grid: WindowGrid,
         rr, cc = np.nonzero(sub)
         j0, j1 = int(r0 + rr.min()), int(r0 + rr.max() + 1)
         i0, i1 = int(c0 + cc.min()), int(c0 + cc.max() + 1)
-        box = kdb.Box(grid.ox + i0 * w - 1, grid.oy + j0 * w - 1, grid.ox + i1 * w + 1, grid.oy + j1 * w + 1)
+        # the shapes touching the tile (a query box: no shape lies beyond KLayout's 32-bit coordinates)
+        box = kdb.Box(*(min(max(v, -COORD_LIMIT), COORD_LIMIT - 1) for v in (grid.ox + i0 * w - 1, grid.oy + j0 * w - 1,
+                                                                              grid.ox + i1 * w + 1, grid.oy + j1 * w + 1)))
         region = merged_region(top, layer_indexes, None, box=box)
         area, length = grid_rasters(region, (grid.ox + i0 * w, grid.oy + j0 * w), w, i1 - i0, j1 - j0)
         keep = mask[j0:j1, i0:i1]
@@ -275,6 +277,18 @@ def _new_store(threads: int) -> kdb.DeepShapeStore:
     return store
 
 
+def _check_reach(top: kdb.Cell, layer_indexes) -> None:
+    """A ValueError if shapes on the layers reach KLayout's largest coordinate, 2**31 - 1 dbu, in x or y:
+    KLayout's merge does not finish there (klayout 0.30: it loops, or fails an internal check)."""
+    box = kdb.Box()
+    for li in layer_indexes:
+        box += top.bbox(li)
+    if not box.empty() and max(box.right, box.top) >= COORD_LIMIT - 1:
+        raise ValueError(f"top cell {top.name!r}: shapes reach {max(box.right, box.top)} dbu in {'x' if box.right >= COORD_LIMIT - 1 else 'y'}, "
+                         f"KLayout's largest coordinate (2**31 - 1), where its merge does not finish; move the die "
+                         "(e.g. in KLayout, Edit > Layout > Move) at least one database unit back from it")
+
+
 def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: WindowGrid, *,
                    threads: int = 2, big: int | None = None, progress: Progress | None = None, stats: dict | None = None):
     """(area, length) per window of the merged shapes of ``layer_indexes`` under ``top`` (dbu^2, dbu).
@@ -286,6 +300,7 @@ def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: Windo
     """
     stats = {} if stats is None else stats
     big = BIG if big is None else big
+    _check_reach(top, layer_indexes)
     the_plan: Plan = plan(layout, top, layer_indexes, grid.w, big)
     stats.update(blocks=len(the_plan.placements), placements=the_plan.count, flat=False, zone_windows=0)
     boxes = {}

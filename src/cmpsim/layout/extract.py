@@ -70,7 +70,8 @@ def dbu_count(value: float, dbu: float, what: str) -> int:
     n = value / dbu
     k = round(n)
     if abs(n - k) > 1e-6 * max(1.0, abs(n)):
-        raise ValueError(f"{what} = {value!r} m is not a whole number of database units ({dbu:g} m)")
+        raise ValueError(f"{what} = {value:g} m is not a whole number of database units: it must be a multiple of the layout's "
+                         f"database unit, {dbu:g} m")
     return int(k)
 
 
@@ -84,14 +85,14 @@ def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]
     groups = resolve_layers(layers, pdk=pdk, layer_map=layer_map)
     in_file = layers_in(layout)
     present = layers_in(layout, cell)
-    listing = ", ".join(f"{l}/{d}" for l, d in sorted(in_file))
+    listing = ", ".join(f"{l}/{d}" for l, d in sorted(in_file)) or "none (the file holds no shapes: empty cells or texts only)"
     pairs: set[tuple[int, int]] = set()
     for spec, group in zip([layers] if isinstance(layers, (str, tuple)) else layers, groups):
         have = [p for p in group if p in present]
         if not have:
             want = ", ".join(f"{l}/{d}" for l, d in group)
             if any(p in in_file for p in group):
-                here = ", ".join(f"{l}/{d}" for l, d in sorted(present))
+                here = ", ".join(f"{l}/{d}" for l, d in sorted(present)) or f"none (no shapes under {cell.name!r})"
                 raise ValueError(f"--layer {spec!r}: layers {want} have no shapes under top cell {cell.name!r} (an empty layer: they are drawn "
                                  f"only under other top cells of {layout.name}); the die's layers are: {here}")
             raise ValueError(f"--layer {spec!r} ({want}) is not in {layout.name}; its layers are: {listing}")
@@ -102,8 +103,9 @@ def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]
 def _grid(layout: Layout, cell, window: float, origin) -> tuple[WindowGrid, tuple[int, int, int, int]]:
     dbu = layout.dbu
     if not (isinstance(window, (int, float)) and window > 0 and math.isfinite(window)):
-        raise ValueError(f"window = {window!r} must be a positive length in metres (--window)")
-    w = dbu_count(window, dbu, "window")
+        shown = f"{window:g}" if isinstance(window, (int, float)) else repr(window)
+        raise ValueError(f"window = {shown} must be a positive length in metres (--window)")
+    w = dbu_count(window, dbu, "--window")
     box = cell.bbox()
     if box.empty():
         raise ValueError(f"top cell {cell.name!r} is empty")
@@ -196,14 +198,22 @@ def extract_windows(layout: Layout | str | os.PathLike, layers, window: float, *
 
 def extract_levels(layout: Layout | str | os.PathLike, levels, window: float, *, top: str | None = None,
                    pdk: str | None = None, layer_map=None, origin: tuple[float, float] | None = None,
-                   big: int | None = None, progress=None) -> list[LayoutWindows]:
+                   big: int | None = None, progress=None, names=None) -> list[LayoutWindows]:
     """:func:`extract_windows` for several levels (each a layer spec or a list of them) on one
     read of the file, one window grid and one store of KLayout's hierarchy. Every level's
-    layers are checked before any is extracted."""
+    layers are checked before any is extracted; a level whose layers are missing or empty is
+    named in the message (``names``: the levels' names, e.g. a stack file's, else their numbers)."""
     if not isinstance(layout, Layout):
         layout = read_layout(layout)
     cell = top_cell(layout, top)
-    all_pairs = [_pairs(layout, cell, spec, pdk, layer_map) for spec in levels]
+    levels = list(levels)
+    names = [str(k + 1) for k in range(len(levels))] if names is None else [repr(str(n)) for n in names]
+    all_pairs = []
+    for name, spec in zip(names, levels):
+        try:
+            all_pairs.append(_pairs(layout, cell, spec, pdk, layer_map))
+        except ValueError as exc:
+            raise ValueError(f"level {name} of {len(levels)}: {exc}") from None
     grid, box = _grid(layout, cell, window, origin)
     out = []
     for k, pairs in enumerate(all_pairs):

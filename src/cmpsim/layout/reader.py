@@ -22,6 +22,8 @@ from pathlib import Path
 
 import klayout.db as kdb
 
+from .twisted import untwist
+
 __all__ = ["Layout", "read_layout", "top_cell", "layers_in", "LayoutTooLarge"]
 
 _GDS_MAGIC = b"\x00\x06\x00\x02"
@@ -101,9 +103,23 @@ def read_layout(path: str | os.PathLike) -> Layout:
         if "bad_alloc" in msg or "memory" in msg.lower():
             raise LayoutTooLarge(f"layout path {str(p)!r} does not fit in this machine's memory ({msg.strip()}); "
                                  "cut the region of interest out of it or use a larger machine") from None
+        if "topological_sort" in msg:  # KLayout's words for a cell that places itself, directly or through others
+            raise ValueError(f"layout path {str(p)!r} has a recursive cell hierarchy (a cell placed inside itself, directly or through "
+                             f"other cells), which no layout tool can flatten; KLayout: {msg.strip()}") from None
         raise ValueError(f"layout path {str(p)!r} could not be read as a layout ({msg.strip()}): {_WHAT}") from None
+    untwist(db)  # bow-ties: KLayout's deep merge would lose them, its flat merge keeps them
     # KLayout keeps the unit in micrometres (0.001): read as a decimal, 1e-9 m stays exactly 1e-9
     return Layout(db=db, path=p, format=fmt, dbu=float(f"{db.dbu!r}e-6"))
+
+
+#: Cell names listed in a message at most (a library of unused cells has hundreds of top cells).
+_LISTED = 10
+
+
+def _names(names: list[str]) -> str:
+    """Up to :data:`_LISTED` names, then how many more."""
+    shown = ", ".join(repr(n) for n in names[:_LISTED])
+    return f"[{shown}{f', ... and {len(names) - _LISTED} more' if len(names) > _LISTED else ''}]"
 
 
 def top_cell(layout: Layout, top: str | None = None) -> kdb.Cell:
@@ -118,13 +134,13 @@ def top_cell(layout: Layout, top: str | None = None) -> kdb.Cell:
     if top is not None:
         cell = db.cell(str(top))
         if cell is None:
-            raise ValueError(f"--top {top!r}: no such cell in {layout.name}; its top-level cells are {tops} "
+            raise ValueError(f"--top {top!r}: no such cell in {layout.name}; its top-level cells are {_names(tops)} "
                              f"({db.cells()} cells in all)")
         return cell
     if not tops:
         raise ValueError(f"layout {layout.name} has no cells")
     if len(tops) > 1:
-        raise ValueError(f"layout {layout.name} has {len(tops)} top-level cells {tops}: "
+        raise ValueError(f"layout {layout.name} has {len(tops)} top-level cells {_names(tops)}: "
                          "choose the die with --top NAME (top=NAME in Python)")
     return db.cell(tops[0])
 

@@ -1,0 +1,139 @@
+"""Odd but legal layouts found by the robustness sweep (docs/layouts.md, "Robustness"): each built
+here with KLayout, each checked against KLayout's flat merge of the same file or against an exact
+area, and the messages of what cannot be extracted."""
+
+from __future__ import annotations
+
+import klayout.db as kdb
+import numpy as np
+import pytest
+
+from cmpsim.layout import extract_levels, extract_windows, read_layout
+from klayout_reference import klayout_flat
+
+UM = 1e-6
+MAX = 2**31 - 1  # KLayout's largest coordinate (dbu)
+
+
+def _polygon(points) -> kdb.Polygon:
+    poly = kdb.Polygon()
+    poly.assign_hull([kdb.Point(x, y) for x, y in points], False)  # as drawn: no normalisation
+    return poly
+
+
+def _write(ly: kdb.Layout, path) -> str:
+    ly.write(str(path))
+    return str(path)
+
+
+def test_bow_ties_count_as_klayouts_flat_merge(tmp_path):
+    """A self-intersecting polygon of zero signed area (a bow-tie: two triangles of 100 um^2, wound in
+    opposite senses) in a cell arrayed 3 x 2 and once in the top cell: KLayout's deep store drops it
+    whole; the extraction keeps both triangles, as KLayout's flat merge does."""
+    ly = kdb.Layout()
+    ly.dbu = 0.001
+    l1 = ly.layer(1, 0)
+    top, leaf = ly.create_cell("TOP"), ly.create_cell("LEAF")
+    bow = _polygon([(0, 0), (0, 20000), (20000, 0), (20000, 20000)])
+    leaf.shapes(l1).insert(bow)
+    leaf.shapes(l1).insert(kdb.Box(0, 25000, 20000, 27000))
+    top.insert(kdb.CellInstArray(leaf.cell_index(), kdb.Trans(kdb.Vector(0, 0)), kdb.Vector(30000, 0), kdb.Vector(0, 30000), 3, 2))
+    top.shapes(l1).insert(bow.moved(100000, 0))
+    path = _write(ly, tmp_path / "bowtie.gds")
+    assert read_layout(path).db.cell("LEAF").shapes(read_layout(path).db.layer(1, 0)).size() == 2
+    for big in (0, None):
+        res = extract_windows(path, "1/0", 5 * UM, big=big)
+        ref, _ = klayout_flat(path, [(1, 0)], res)
+        np.testing.assert_allclose(res.density, ref, atol=1e-12)
+        exact = 7 * 2 * 100e6 + 6 * 40e6  # dbu^2: seven bow-ties of two triangles, six bars
+        assert res.density.sum() * 5000**2 == pytest.approx(exact, rel=1e-12)
+
+
+@pytest.mark.parametrize("corner", ["max", "min"])
+def test_a_die_at_the_ends_of_klayouts_coordinates(tmp_path, corner):
+    """A die drawn against +-2**31 dbu (a grid reaching past KLayout's 32-bit coordinates: its rasteriser
+    read zero there): the same windows as the same die moved to the origin, flat and composed."""
+    def die(at: int) -> kdb.Layout:
+        ly = kdb.Layout()
+        ly.dbu = 0.001
+        l1 = ly.layer(1, 0)
+        top, leaf = ly.create_cell("TOP"), ly.create_cell("LEAF")
+        leaf.shapes(l1).insert(kdb.Box(0, 0, 21000, 20000))
+        leaf.shapes(l1).insert(_polygon([(0, 22000), (20000, 22000), (0, 31000)]))
+        top.insert(kdb.CellInstArray(leaf.cell_index(), kdb.Trans(kdb.Vector(at + 3, at + 7)), kdb.Vector(33001, 0), kdb.Vector(0, 32003), 3, 2))
+        top.shapes(l1).insert(kdb.Box(at, at, at + 99003 + 7, at + 1000))  # the die's corner, 7 dbu past the last leaf
+        return ly
+
+    at = MAX - 99011 if corner == "max" else -MAX - 1
+    far = _write(die(at), tmp_path / "far.gds")
+    near = _write(die(0), tmp_path / "near.gds")
+    assert read_layout(far).db.top_cell().bbox().right == (MAX - 1 if corner == "max" else -MAX + 99009)
+    for big in (0, None):
+        a = extract_windows(far, "1/0", 5 * UM, big=big)
+        b = extract_windows(near, "1/0", 5 * UM, big=big)
+        np.testing.assert_allclose(a.density, b.density, atol=1e-12)
+        np.testing.assert_allclose(a.boundary, b.boundary, rtol=1e-12, atol=1e-15)
+        assert a.density.max() > 0.5
+    if corner == "max":  # one dbu further: KLayout's merge does not finish with a shape on 2**31 - 1
+        with pytest.raises(ValueError, match=r"shapes reach 2147483647 dbu in x, KLayout's largest coordinate .* move the die"):
+            extract_windows(_write(die(at + 1), tmp_path / "limit.gds"), "1/0", 5 * UM)
+
+
+def test_a_file_without_shapes_says_so(tmp_path):
+    """An empty top cell, or one with texts only: the message says the file holds no shapes (not an empty list)."""
+    ly = kdb.Layout()
+    top = ly.create_cell("TOP")
+    top.shapes(ly.layer(1, 0)).insert(kdb.Text("VDD", 0, 0))
+    path = _write(ly, tmp_path / "texts.gds")
+    with pytest.raises(ValueError, match=r"--layer '1/0' .* its layers are: none \(the file holds no shapes"):
+        extract_windows(path, "1/0", 5 * UM)
+
+
+def test_a_library_of_unused_cells_lists_ten_names(tmp_path):
+    """Three hundred uninstantiated cells are three hundred top cells: the message lists ten and names --top."""
+    ly = kdb.Layout()
+    for k in range(300):
+        ly.create_cell(f"LIB_{k:03d}").shapes(ly.layer(1, 0)).insert(kdb.Box(0, 0, 30000, 30000))
+    path = _write(ly, tmp_path / "library.gds")
+    with pytest.raises(ValueError, match=r"300 top-level cells \['LIB_000', .*'LIB_009', \.\.\. and 290 more\]: choose the die with --top") as err:
+        extract_windows(path, "1/0", 5 * UM)
+    assert len(str(err.value)) < 400
+    res = extract_windows(path, "1/0", 5 * UM, top="LIB_123")
+    assert res.density.min() == 1.0
+
+
+def test_a_window_off_the_database_unit_names_window(tmp_path):
+    ly = kdb.Layout()
+    ly.dbu = 0.005
+    ly.create_cell("TOP").shapes(ly.layer(1, 0)).insert(kdb.Box(0, 0, 10000, 10000))
+    path = _write(ly, tmp_path / "dbu5nm.gds")
+    with pytest.raises(ValueError, match=r"--window = 5.002e-06 m is not a whole number of database units: it must be a multiple .* 5e-09 m"):
+        extract_levels(path, ["1/0"], 5.002 * UM)
+    assert extract_windows(path, "1/0", 5 * UM).density.shape == (10, 10)
+
+
+def test_a_stack_level_without_its_layers_is_named(tmp_path):
+    """A stack whose second level names a layer the file lacks: the message names the level (the stack
+    file's name for it, else its number), not only the layer."""
+    ly = kdb.Layout()
+    ly.create_cell("TOP").shapes(ly.layer(1, 0)).insert(kdb.Box(0, 0, 10000, 10000))
+    path = _write(ly, tmp_path / "one_layer.gds")
+    with pytest.raises(ValueError, match=r"^level 'm2' of 2: --layer '99/0' \(99/0\) is not in one_layer.gds; its layers are: 1/0"):
+        extract_levels(path, ["1/0", "99/0"], 5 * UM, names=["m1", "m2"])
+    with pytest.raises(ValueError, match=r"^level 2 of 2: --layer '99/0'"):
+        extract_levels(path, ["1/0", "99/0"], 5 * UM)
+
+
+def test_a_recursive_hierarchy_is_named(tmp_path):
+    """A corrupt file whose cell A places B and B places A: refused naming the recursion (KLayout's own words were an internal
+    error about a topological sort)."""
+    gdstk = pytest.importorskip("gdstk")  # KLayout will not write such a file
+    lib = gdstk.Library(unit=1e-6, precision=1e-9)
+    a, b, top = lib.new_cell("A"), lib.new_cell("B"), lib.new_cell("TOP")
+    a.add(gdstk.rectangle((0, 0), (10, 10), layer=1), gdstk.Reference("B", (20, 0)))
+    b.add(gdstk.rectangle((0, 0), (5, 5), layer=1), gdstk.Reference("A", (0, 20)))
+    top.add(gdstk.Reference("A", (0, 0)))
+    path = tmp_path / "recursive.gds"
+    lib.write_gds(str(path))
+    with pytest.raises(ValueError, match=r"recursive.gds' has a recursive cell hierarchy \(a cell placed inside itself"):
+        read_layout(path)
