@@ -341,3 +341,14 @@ def test_a_cell_snapped_onto_the_contact_height_keeps_polishing():
     removed = 0.2692705992352215 * (0.0 - za) + (1 - 0.2692705992352215) * (-1e-06 - zb)
     assert abs(removed - k * 127.6245815443355) < 1e-12 * 1e-6  # mass balance: the cell removes K t on average
     assert 0.0 <= za - zb < 9.795319242856495e-08
+
+
+def test_a_contact_height_below_the_ulp_of_the_heights_is_integrated():
+    """Found on an odd layout (circles at a pitch 1 dbu off their size): a contact height of 1.2 pm under
+    heights of about 1 um. After the snap onto |s| = h the step exceeds h by an ulp of the heights, far
+    more than 1e-12 h, and the integration bounced between its regimes until it gave up. Now it goes on,
+    and the cell's mean removal is the blanket rate times the time (the pad's load balance)."""
+    za0, zb0, f, h, k, dt = -6.033274519004813e-07, -1e-06, 0.4143686802456941, 1.2179956180421813e-12, 200e-9 / 60, 90.0
+    za, zb = advance(za0, zb0, f, h, k, k, dt)
+    assert f * (za - za0) + (1 - f) * (zb - zb0) == pytest.approx(-k * dt, rel=1e-9)
+    assert abs(za - zb) <= h * (1 + 1e-9) + 1e-21  # the step ends inside the contact height

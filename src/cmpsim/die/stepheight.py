@@ -85,11 +85,14 @@ def advance(za, zb, f, h, k_a, k_b, dt):
         todo = left > 0
         if not todo.any():
             break
-        # after the snap above, |zA - zB| can exceed h by an ulp (zA - (zA - h) != h in floating
-        # point); a relative tolerance of 1e-12 keeps such a cell in the contact regime instead of
-        # sending it back to the contactless one, where it would make no progress
+        # after the snap above, |zA - zB| can exceed h by an ulp of the heights (zA - (zA - h) != h
+        # in floating point); a tolerance of 1e-12 h or a few ulps of the heights, whichever is
+        # larger, keeps such a cell in the contact regime instead of sending it back to the
+        # contactless one, where it would make no progress (a contact height of picometres under
+        # heights of micrometres: the ulp of the heights is the larger)
         sig = np.abs(za - zb)
-        inside = todo & (sig <= h * (1.0 + 1e-12))
+        ulps = 8.0 * np.finfo(float).eps * np.maximum(np.abs(za), np.abs(zb))
+        inside = todo & (sig <= h * (1.0 + 1e-12) + ulps)
         sig = np.minimum(sig, h)
         b = (k_up * (1.0 - u) / u + k_dn) / h
         a = k_up - k_dn  # d sigma/dt = -a - b sigma
