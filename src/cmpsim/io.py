@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 import contextlib
+import csv
+import io
 import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv"]
 
 
 @contextlib.contextmanager
@@ -41,10 +43,14 @@ def atomic_write_text(path: Path, text: str) -> None:
 
 
 def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str:
-    """The UTF-8 text of an input file, or ``error`` saying which file (``what``) and why."""
+    """The UTF-8 text of an input file, or ``error`` saying which file (``what``) and why.
+
+    A leading byte-order mark (spreadsheets write one when they save "CSV UTF-8") is dropped: kept,
+    it would glue itself to the first column name or hide the first comment line.
+    """
     path = Path(path)
     try:
-        return path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} does not exist") from None
     except UnicodeDecodeError as exc:
@@ -71,3 +77,36 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
         if s:
             body.append((i, line))
     return meta, body
+
+
+def tidy_csv(text: str) -> str:
+    """A data file's text as a spreadsheet's export of it is meant: the header's column names in lower case
+    and without the empty names of trailing commas; a row's trailing empty fields beyond the header dropped.
+
+    Lines keep their numbers (a changed line is rewritten in place), so messages still name the file's
+    lines; a row with a filled field beyond the header is left for the reader to refuse.
+    """
+    lines = text.splitlines()
+    body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.strip().startswith("#")]
+    if not body:
+        return text
+    header = next(csv.reader([lines[body[0]]]))
+    n = len(header)
+    while n > 1 and not header[n - 1].strip():
+        n -= 1
+    names = [h.strip().lower() for h in header[:n]]
+    changed = False
+    if names != [h.strip() for h in header]:
+        lines[body[0]] = _csv_line(names)
+        changed = True
+    for i, row in zip(body[1:], csv.reader([lines[i] for i in body[1:]])):
+        if len(row) > n and not any(c.strip() for c in row[n:]):
+            lines[i] = _csv_line(row[:n])
+            changed = True
+    return "\n".join(lines) + "\n" if changed else text
+
+
+def _csv_line(values) -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="").writerow(values)
+    return buf.getvalue()

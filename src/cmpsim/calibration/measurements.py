@@ -132,6 +132,18 @@ def _quantity(text: str, unit: str, target: str, where: str, column: str) -> flo
         raise MeasurementError(f"{where}: column {column!r}: cannot read {text!r} as a quantity in units of {target or '1'} ({exc})") from None
 
 
+#: Spellings of the degree Celsius and Fahrenheit in a temperature-rise column, lower case (pint reads
+#: ``degC``, ``degF`` as points on a scale: 18 degF would become 265 K, not the rise of 10 K it is).
+_CELSIUS = ("degc", "°c", "c", "celsius", "deg c", "delta_degc", "℃")
+_FAHRENHEIT = ("degf", "°f", "f", "fahrenheit", "deg f", "delta_degf", "℉")
+
+
+def _temperature_difference_unit(unit: str) -> str:
+    """The unit of a temperature difference as pint must read it: Celsius -> K, Fahrenheit -> delta_degF; others unchanged."""
+    u = unit.strip().lower()
+    return "K" if u in _CELSIUS else "delta_degF" if u in _FAHRENHEIT else unit
+
+
 def _length(rec, column, where, required=False, positive=True):
     text = rec.get(column, "")
     if not text:
@@ -161,9 +173,9 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    from ..io import comments_and_rows
+    from ..io import comments_and_rows, tidy_csv
 
-    meta, body = comments_and_rows(text)
+    meta, body = comments_and_rows(tidy_csv(text))
     if not body:
         raise MeasurementError(f"{path}: no header row and no data rows (format: cmpsim/data/README.md, docs/calibrate-die.md)")
     hline, htext = body[0]
@@ -190,6 +202,14 @@ def read_measurements(path, text: str | None = None) -> list:
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
                                    f"{', '.join(list(STRUCTURE_QUANTITIES) + list(THERMAL_QUANTITIES))}")
+        from ..inputs.units import value_and_unit
+
+        try:  # a value written with its unit ("50 nm"), the unit column empty or the same
+            rec["value"], rec["unit"] = value_and_unit(rec["value"], rec["unit"])
+            if rec.get("uncertainty"):
+                rec["uncertainty"] = value_and_unit(rec["uncertainty"], rec["unit"])[0]
+        except ValueError as exc:
+            raise MeasurementError(f"{where}: column 'value': {exc}") from None
         if not rec["value"]:
             raise MeasurementError(f"{where}: column 'value' is empty")
         if not rec["unit"] and q != "friction_coefficient":
@@ -199,8 +219,8 @@ def read_measurements(path, text: str | None = None) -> list:
             float(rec["value"])
         except ValueError:
             raise MeasurementError(f"{where}: column 'value': {rec['value']!r} is not a number") from None
-        if q == "pad_temperature_rise":  # a difference of temperatures: degC and K are the same size
-            unit = {"degc": "K", "°c": "K", "c": "K", "delta_degc": "K"}.get(rec["unit"].lower(), rec["unit"])
+        if q == "pad_temperature_rise":  # a difference of temperatures: a degree Celsius is a kelvin, a degree Fahrenheit 5/9 K
+            unit = _temperature_difference_unit(rec["unit"])
         else:
             unit = rec["unit"] or "1"
         value = _quantity(rec["value"], unit, target, where, "value")
@@ -280,6 +300,9 @@ def read_measurements(path, text: str | None = None) -> list:
                     point_config(Config.default(), {c: v})
                 except ValueError as exc:
                     raise MeasurementError(f"{where}: column {c!r}: {exc}") from None
+            if q == "pad_temperature_rise" and not value > 0:
+                raise MeasurementError(f"{where}: column 'value': a pad temperature rise must be > 0 K (friction only heats the pad; "
+                                       f"the heat balance cannot fit a rise of {rec['value']} {rec['unit']})")
             if q == "friction_coefficient" and not 0 < value < 10:
                 raise MeasurementError(f"{where}: column 'value': a friction coefficient must lie in (0, 10); got {rec['value']}")
             out.append(ThermalRecord(q, value, unc, t, conditions, flow, **common))

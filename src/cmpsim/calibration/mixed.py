@@ -142,7 +142,7 @@ def _csv_line(values) -> str:
 
 def read_all(paths) -> Measurements:
     """Read measurement files of every family (film, structures, pad, lots); ValueError naming file, line, row and column."""
-    from ..io import read_text
+    from ..io import read_text, tidy_csv
     from ..validation.data import load_datasets
     from .lotdata import read_lot_rows
     from .measurements import StructureRecord, read_measurements
@@ -150,7 +150,7 @@ def read_all(paths) -> Measurements:
     out = Measurements()
     for p in [paths] if isinstance(paths, (str, Path)) else list(paths):
         path = Path(p)
-        text = read_text(path, "data file", MixedDataError)
+        text = tidy_csv(read_text(path, "data file", MixedDataError))
         out.paths.append(str(path))
         for group, (sub, rows) in _split(path, text).items():
             try:
@@ -166,5 +166,7 @@ def read_all(paths) -> Measurements:
     names = [d.name for d in out.datasets]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise MixedDataError(f"data set names must be unique; repeated: {', '.join(dup)}")
+        where = {n: sorted({str(d.path) for d in out.datasets if d.name == n}) for n in dup}
+        raise MixedDataError("data set names must be unique; repeated: " + "; ".join(f"{n!r} in {' and '.join(where[n])}" for n in dup)
+                             + " (give each file its own '# dataset: NAME' line, or a dataset column)")
     return out

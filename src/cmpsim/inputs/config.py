@@ -482,7 +482,10 @@ class Config:
             data = tomllib.loads(read_text(path, "config file"))
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
-        return cls.from_mapping(data, base=base)
+        try:
+            return cls.from_mapping(data, base=base)
+        except ValueError as exc:  # an unknown key or a bad value: say which file holds it
+            raise ValueError(f"config file {str(path)!r}: {exc}") from None
 
     @property
     def solid_volume_fraction(self) -> float:

@@ -123,6 +123,9 @@ DEPTH_QUANTITIES: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "removal": ("m", "nm", "depth of film removed in the polish time (blanket, at the solved rate)", ("time",)),
     "thickness": ("m", "nm", "film thickness left after the polish time (initial_thickness - rate x time, >= 0)", ("time", "initial_thickness")),
 }
+#: Quantities that may be negative (an angle, a stress by its sign); every other measured quantity is >= 0
+#: (a rate, a depth, a thickness, a fraction, a ratio, a friction coefficient) and a negative value is refused.
+SIGNED_QUANTITIES = ("attack_angle", "shear_stress_mean", "normal_stress_mean")
 #: Quantities that may be given at a ``radius`` (or ``x``, ``y``): the removal rate and the depths.
 PROFILE_QUANTITIES = ("removal_rate", "removal_rate_mean", "removal", "thickness")
 
@@ -176,6 +179,8 @@ class DataPoint:
     where: dict[str, float] = field(default_factory=dict)
     #: the data row (1 = the first row after the header)
     row: int = 0
+    #: the file the point was read from ("" when built in code)
+    path: str = ""
 
     @property
     def value_si(self) -> float:
@@ -256,12 +261,12 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import comments_and_rows, read_text
+    from ..io import comments_and_rows, read_text, tidy_csv
 
     path = Path(path)
     if text is None:
         text = read_text(path, "data file", DataError)
-    meta, body_lines = comments_and_rows(text)
+    meta, body_lines = comments_and_rows(tidy_csv(text))
     if not body_lines:
         raise DataError(f"{path}: no header row and no data rows (see cmpsim/data/README.md for the format)")
     header_line, header_text = body_lines[0]
@@ -303,6 +308,10 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         if quantity not in QUANTITIES and quantity not in DEPTH_QUANTITIES:
             raise bad("quantity", f"unknown quantity {quantity!r}; known: {', '.join(known_quantities())}")
         try:
+            rec["value"], rec["unit"] = units.value_and_unit(rec["value"], rec["unit"])
+        except ValueError as exc:
+            raise bad("value", str(exc)) from None
+        try:
             value = _parse_float(rec["value"], "value", where)
         except DataError as exc:
             raise bad("value", str(exc).split(": ", 1)[1]) from None
@@ -310,10 +319,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         unc_text = rec.get("uncertainty", "")
         uncertainty = None
         if unc_text:
-            try:
-                uncertainty = _parse_float(unc_text, "uncertainty", where)
-            except DataError as exc:
-                raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
+            uncertainty = _uncertainty(unc_text, unit, quantity, where, bad)
             if uncertainty <= 0:
                 raise bad("uncertainty", f"uncertainty must be > 0 (or empty); got {unc_text!r}")
         comparison = rec.get("comparison") or default_comparison
@@ -323,11 +329,16 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             raise bad("uncertainty", "comparison 'range' needs the half-width of the range in the uncertainty column")
         if comparison in ("order", "shape") and value <= 0:
             raise bad("value", f"comparison {comparison!r} needs a positive value; got {value:g}")
+        if value < 0 and quantity not in SIGNED_QUANTITIES:
+            raise bad("value", f"a {quantity} is >= 0; got {rec['value']} {unit}")
         try:
             to_si(value, unit, quantity)
         except ValueError as exc:
             raise bad("unit", str(exc)) from None
         place = _point_place(rec, quantity, bad)
+        if quantity == "thickness" and to_si(value, unit, quantity) > place["initial_thickness"] * (1 + 1e-12):
+            raise bad("value", f"the thickness left ({rec['value']} {unit}) exceeds the initial_thickness ({rec['initial_thickness']}): "
+                               "a polish only removes film")
         conditions = {}
         for col in header:
             if col in META_COLUMNS or col in POINT_COLUMNS or not rec[col]:
@@ -344,12 +355,13 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         except ValueError as exc:
             raise bad(", ".join(conditions), str(exc)) from None
         name = rec.get("dataset") or default_name
-        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no)
+        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no, str(path))
         ds = datasets.setdefault(name, Dataset(name, [], dict(meta), path))
         ds.points.append(p)
     if not datasets:
         raise DataError(f"{path}: the file has a header but no data rows")
     for ds in datasets.values():
+        _one_unit(ds)
         modes = {p.comparison for p in ds.points}
         if len(modes) > 1:
             raise DataError(f"{path}: data set {ds.name!r} mixes comparison modes {sorted(modes)}; use one per data set")
@@ -359,6 +371,37 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             if len(ds.points) < 2:
                 raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
     return list(datasets.values())
+
+
+def _one_unit(ds: Dataset) -> None:
+    """Points of one quantity written in several units (``nm/min`` and ``A/min``) re-expressed, in place, in the
+    first point's unit: a data set's RMS error, its shape scale and the mean it is compared with need one unit."""
+    if len({p.quantity for p in ds.points}) != 1 or len({p.unit for p in ds.points}) == 1:
+        return
+    unit, q = ds.points[0].unit, ds.points[0].quantity
+    for p in ds.points[1:]:
+        if p.unit != unit:
+            p.value = from_si(to_si(p.value, p.unit, q), unit, q)
+            if p.uncertainty is not None:
+                p.uncertainty = from_si(p.uncertainty_si + to_si(0.0, unit, q), unit, q)
+            p.unit = unit
+
+
+def _uncertainty(text: str, unit: str, quantity: str, where: str, bad) -> float:
+    """The uncertainty cell in the row's ``unit``: a number, or a number with a unit of the quantity (``"10 nm/min"``)."""
+    number, own = units.value_and_unit(text, "")
+    try:
+        u = _parse_float(number, "uncertainty", where)
+    except DataError as exc:
+        raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
+    if own and own.replace(" ", "").lower() != unit.replace(" ", "").lower():
+        try:
+            u = to_si(u, own, quantity) - to_si(0.0, own, quantity)
+            u = from_si(u, unit, quantity) - from_si(0.0, unit, quantity)
+        except Exception:  # noqa: BLE001 - a relative (5 %) or foreign unit
+            raise bad("uncertainty", f"{text!r} is not an uncertainty in units of {quantity} (give it in {unit}, e.g. '10'; "
+                                     "a relative uncertainty in % is not read)") from None
+    return u
 
 
 def _point_place(rec: dict, quantity: str, bad) -> dict[str, float]:

@@ -1,0 +1,193 @@
+"""Measurement files as a process engineer transcribes published data: spreadsheet exports, the units of
+papers and patents, values with their units, and the values that cannot be fitted. Reading only (no solve),
+except where a command must refuse before it solves; each test well under a second or two."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from cmpsim.calibration.measurements import ThermalRecord
+from cmpsim.calibration.mixed import read_all
+from cmpsim.calibration.uncertainty import uncertainty
+from cmpsim.cli import main
+from cmpsim.inputs import units
+from cmpsim.inputs.config import Config
+
+H = "quantity,value,unit,applied_pressure,rotation_speed,film"
+
+
+def _write(tmp_path, name, text, encoding="utf-8"):
+    p = tmp_path / name
+    p.write_bytes(text.encode(encoding))
+    return p
+
+
+def _points(path):
+    return [pt for d in read_all([path]).datasets for pt in d.points]
+
+
+def test_a_spreadsheet_export_reads_as_written(tmp_path):
+    # Excel's "CSV UTF-8": a byte-order mark, CRLF, capitalised column names and a trailing comma on every line
+    text = "\ufeff# dataset: excel\r\nQuantity,Value,Unit,Applied_Pressure,Rotation_Speed,Film,\r\nremoval_rate,150,nm/min,4 psi,60 rpm,oxide,\r\n\r\nremoval_rate,220,nm/min,6 psi,60 rpm,oxide,\r\n"
+    m = read_all([_write(tmp_path, "excel.csv", text)])
+    assert [d.name for d in m.datasets] == ["excel"]  # the comment line under the BOM is still the header block
+    pts = m.datasets[0].points
+    assert [p.value_si for p in pts] == pytest.approx([2.5e-9, 220e-9 / 60])
+    assert [p.line for p in pts] == [3, 5]  # line numbers of the file
+    assert pts[0].conditions == {"applied_pressure": "4 psi", "rotation_speed": "60 rpm", "film": "oxide"}
+
+
+def test_a_filled_field_beyond_the_header_is_still_refused(tmp_path):
+    p = _write(tmp_path, "extra.csv", "quantity,value,unit\nremoval_rate,150,nm/min,oops\n")
+    with pytest.raises(ValueError, match=r"extra.csv:2: row 1: 4 fields but the header has 3"):
+        read_all([p])
+
+
+@pytest.mark.parametrize(
+    "unit, si",
+    [
+        ("nm/min", 1e-9 / 60), ("Å/min", 1e-10 / 60), ("A/min", 1e-10 / 60), ("Angstrom/min", 1e-10 / 60), ("angstroms/min", 1e-10 / 60),
+        ("NM/MIN", 1e-9 / 60), ("A/sec", 1e-10), ("A/s", 1e-10), ("nm/s", 1e-9), ("um/h", 1e-6 / 3600), ("um/hr", 1e-6 / 3600),
+        ("kA/min", 1e-7 / 60), ("nm min-1", 1e-9 / 60), ("micron/min", 1e-6 / 60),
+    ],
+)
+def test_removal_rate_units_of_published_tables(unit, si):
+    assert units.convert(1.0, unit, "m/s") == pytest.approx(si, rel=1e-12)
+    assert units.convert(si, "m/s", unit) == pytest.approx(1.0, rel=1e-12)  # and back, as the reports write them
+
+
+@pytest.mark.parametrize(
+    "text, target, si",
+    [
+        ("4 PSI", "Pa", 4 * 6894.757293168361), ("4 Psi", "Pa", 4 * 6894.757293168361), ("300 g/cm2", "Pa", 300 * 9.80665 * 10),
+        ("0.3 kg/cm2", "Pa", 0.3 * 9.80665e4), ("4 lb/in2", "Pa", 4 * 6894.757293168361), ("27.6 kPa", "Pa", 27600.0), ("0.0276 MPa", "Pa", 27600.0),
+        ("60 RPM", "rad/s", 2 * math.pi), ("60 r/min", "rad/s", 2 * math.pi), ("100 cm/s", "m/s", 1.0),
+        ("200 MM", "m", 0.2), ("8 IN", "m", 0.2032), ("5000 A", "m", 5e-7), ("1.5 kA", "m", 1.5e-7), ("1E3 A", "m", 1e-7), ("60 SEC", "s", 60.0),
+    ],
+)
+def test_condition_cells_in_the_spellings_of_papers(text, target, si):
+    assert units.to_si(text, target) == pytest.approx(si, rel=1e-9)
+
+
+@pytest.mark.parametrize("text, target", [("3 kg", "Pa"), ("60m", "rad/s"), ("4", "Pa"), ("60", "s"), ("2 nm", "Pa")])
+def test_a_unit_of_the_wrong_dimension_is_still_refused(text, target):
+    with pytest.raises(ValueError, match="wrong dimension"):
+        units.to_si(text, target, "x")
+
+
+def test_a_unit_pint_reads_is_never_reinterpreted():
+    assert units.to_si("20 mPa", "Pa") == pytest.approx(0.02)  # millipascal as written, not MPa
+    assert units.to_si("3 s", "s") == 3.0
+
+
+def test_a_value_written_with_its_unit(tmp_path):
+    p = _write(tmp_path, "v.csv", "quantity,value,unit,uncertainty\nremoval_rate,150 nm/min,,10 nm/min\nremoval_rate,2200,A/min,10 nm/min\n"
+               "removal_rate,1.6e3 A/min,A/min,50\n")
+    pts = _points(p)
+    assert [q.value_si for q in pts] == pytest.approx([150e-9 / 60, 220e-9 / 60, 160e-9 / 60])
+    assert [q.uncertainty_si for q in pts] == pytest.approx([10e-9 / 60, 10e-9 / 60, 5e-9 / 60])
+
+
+@pytest.mark.parametrize(
+    "row, column, message",
+    [
+        ("removal_rate,150 nm/min,A/min,", "value", "carries the unit 'nm/min' but the unit column says 'A/min'"),
+        ("removal_rate,150,nm/min,5%", "uncertainty", "a relative uncertainty in % is not read"),
+        ("removal_rate,-150,nm/min,", "value", "a removal_rate is >= 0"),
+    ],
+)
+def test_a_value_that_cannot_be_read_names_its_row_and_column(tmp_path, row, column, message):
+    p = _write(tmp_path, "bad.csv", "quantity,value,unit,uncertainty\n" + row + "\n")
+    with pytest.raises(ValueError, match=rf"bad.csv:2: row 1, column '{column}': .*{message}"):
+        read_all([p])
+
+
+def test_a_thickness_above_the_initial_thickness_is_refused(tmp_path):
+    p = _write(tmp_path, "t.csv", "quantity,value,unit,time,initial_thickness\nthickness,800,nm,60 s,1 um\nthickness,12000,A,60 s,1 um\n")
+    with pytest.raises(ValueError, match=r"t.csv:3: row 2, column 'value': the thickness left \(12000 A\) exceeds the initial_thickness"):
+        read_all([p])
+
+
+def test_one_series_in_several_units_is_compared_in_one(tmp_path):
+    p = _write(tmp_path, "mix.csv", f"{H}\nremoval_rate,150,NM/MIN,4 PSI,60 RPM,oxide\nremoval_rate,2200,Angstrom/min,6 psi,60 rpm,oxide\n"
+               "removal_rate,4.5,nm/s,8 psi,60 rpm,oxide\n")
+    pts = _points(p)
+    assert {q.unit for q in pts} == {"NM/MIN"}
+    assert [q.value for q in pts] == pytest.approx([150, 220, 270])
+    assert [q.value_si for q in pts] == pytest.approx([150e-9 / 60, 220e-9 / 60, 4.5e-9])
+
+
+@pytest.mark.parametrize("unit, rise, unc", [("K", 10.0, 1.0), ("°C", 10.0, 1.0), ("degC", 10.0, 1.0), ("degF", 18.0, 1.8), ("°F", 18.0, 1.8)])
+def test_a_temperature_rise_is_a_difference_of_temperatures(tmp_path, unit, rise, unc):
+    p = _write(tmp_path, "pad.csv", f"quantity,value,unit,uncertainty,time\npad_temperature_rise,{rise},{unit},{unc},60 s\n")
+    (r,) = read_all([p]).pad
+    assert isinstance(r, ThermalRecord)
+    assert (r.value, r.uncertainty) == pytest.approx((10.0, 1.0))  # 18 degF of rise is 10 K, not 265 K
+
+
+@pytest.mark.parametrize("rise", ["0", "-3"])
+def test_a_pad_that_does_not_warm_is_refused(tmp_path, rise):
+    p = _write(tmp_path, "pad.csv", f"quantity,value,unit,time\npad_temperature_rise,{rise},K,60 s\n")
+    with pytest.raises(ValueError, match=r"pad.csv:2: row 1, column 'value': a pad temperature rise must be > 0 K"):
+        read_all([p])
+
+
+def test_a_structure_in_microns_and_angstroms(tmp_path):
+    p = _write(tmp_path, "d.csv", "quantity,value,unit,process,line_width,line_space,structure_size\ndishing,500 A,,copper,10 micron,10 µm,100 UM\n")
+    (r,) = read_all([p]).structures
+    assert (r.value, r.line_width, r.line_space, r.structure_size) == pytest.approx((5e-8, 1e-5, 1e-5, 1e-4))
+
+
+def test_a_lot_row_with_a_spreadsheet_wafer_number(tmp_path):
+    p = _write(tmp_path, "lot.csv", "quantity,value,unit,wafer\nthickness,5000,A,1.0\nthickness,512 nm,,2\n")
+    lots = read_all([p]).lots
+    assert [r.wafer for r in lots] == [1, 2]
+    assert [r.value for r in lots] == pytest.approx([5e-7, 5.12e-7])
+    bad = _write(tmp_path, "lot2.csv", "quantity,value,unit,wafer\nthickness,500,nm,2.5\n")
+    with pytest.raises(ValueError, match=r"lot2.csv:2: row 1, column 'wafer': '2.5' is not a wafer number"):
+        read_all([bad])
+
+
+def test_one_data_set_name_in_two_files_names_both(tmp_path):
+    a = _write(tmp_path, "a.csv", "# dataset: same\nquantity,value,unit\nremoval_rate,150,nm/min\n")
+    b = _write(tmp_path, "b.csv", "# dataset: same\nquantity,value,unit\nremoval_rate,160,nm/min\n")
+    with pytest.raises(ValueError, match=r"repeated: 'same' in .*a.csv and .*b.csv"):
+        read_all([a, b])
+
+
+def test_a_foreign_config_file_is_named(tmp_path):
+    p = _write(tmp_path, "pyproject.toml", "[tool.poetry]\nname = 'x'\n")
+    with pytest.raises(ValueError, match=r"config file '.*pyproject.toml': unknown parameter 'tool'"):
+        Config.from_toml(p)
+
+
+def test_an_exact_fit_without_uncertainties_has_no_interval():
+    # two points, one input, residuals zero: the reduced chi-square cannot scale the covariance
+    J = np.array([[1.0], [2.0]])
+    u = uncertainty(J, 1e-30, 1, False, {"x": 1.0}, {"x": False}, {"x": 1.0}, {"x": (0.0, 10.0)})
+    assert all(math.isnan(v) for v in u.ci95["x"]) and math.isnan(u.stderr["x"])
+    assert any("fitted exactly" in n for n in u.notes)
+    u = uncertainty(J, 0.5, 1, False, {"x": 1.0}, {"x": False}, {"x": 1.0}, {"x": (0.0, 10.0)})  # a real scatter: scaled as before
+    assert u.stderr["x"] == pytest.approx(math.sqrt(0.5 / 5.0))
+
+
+def test_calibrate_refuses_a_zero_without_uncertainty_and_writes_nothing(tmp_path):
+    p = _write(tmp_path, "zero.csv", f"{H}\nremoval_rate,0,nm/min,4 psi,60 rpm,oxide\nremoval_rate,220,nm/min,6 psi,60 rpm,oxide\n")
+    out = tmp_path / "cal.toml"
+    r = CliRunner().invoke(main, ["calibrate", str(p), "--grid", "coarse", "--out", str(out), "--quiet"])
+    assert r.exit_code == 2, r.output
+    assert "zero.csv:2: row 1, column 'uncertainty': a measured removal_rate of 0 needs its uncertainty" in r.output
+    assert not out.exists()
+
+
+def test_validate_refuses_a_position_beyond_the_wafer_before_solving(tmp_path):
+    p = _write(tmp_path, "prof.csv", "quantity,value,unit,radius\nremoval_rate,150,nm/min,10 mm\nremoval_rate,150,nm/min,2 in\n")
+    out = tmp_path / "v"
+    r = CliRunner().invoke(main, ["validate", str(p), "--grid", "coarse", "--out", str(out), "--markdown"])
+    assert r.exit_code == 2, r.output
+    assert "prof.csv:3: row 2, column 'radius': radius 50.8 mm lies beyond the wafer (radius 38.1 mm" in r.output
+    assert not out.exists()
