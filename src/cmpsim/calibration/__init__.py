@@ -244,5 +244,5 @@ def _choose_free(datasets, config: Config):
     choice = choose(J, names, [c.why for c in cands], max(n_pts - n_shape - 1, 0))
     choice.notes = notes
     if not choice.names:
-        raise CalibrationError("the data identify none of the inputs they could choose: " + "; ".join(why for _, why in choice.left))
+        raise CalibrationError("the data identify none of the inputs they could choose: " + "; ".join(f"{n}: {why}" for n, why in choice.left))
     return choice, choice.names
