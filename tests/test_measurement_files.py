@@ -191,3 +191,11 @@ def test_validate_refuses_a_position_beyond_the_wafer_before_solving(tmp_path):
     assert r.exit_code == 2, r.output
     assert "prof.csv:3: row 2, column 'radius': radius 50.8 mm lies beyond the wafer (radius 38.1 mm" in r.output
     assert not out.exists()
+
+
+@pytest.mark.parametrize("name, kind", [("recipe_copper.toml", "is a recipe"), ("example_sweep.toml", "is a sweep specification")])
+def test_a_recipe_or_a_sweep_given_as_config_says_what_it_is(name, kind):
+    from importlib import resources
+
+    with pytest.raises(ValueError, match=rf"config file '.*{name}' {kind}"):
+        Config.from_toml(str(resources.files("cmpsim") / "data" / name))
