@@ -199,3 +199,43 @@ def test_a_recipe_or_a_sweep_given_as_config_says_what_it_is(name, kind):
 
     with pytest.raises(ValueError, match=rf"config file '.*{name}' {kind}"):
         Config.from_toml(str(resources.files("cmpsim") / "data" / name))
+
+
+def test_a_template_with_empty_rows_and_the_columns_of_other_families(tmp_path):
+    # a fab's template: every family's columns, ",,,," rows between the points; only the filled ones count
+    p = _write(tmp_path, "t.csv", "quantity,value,unit,process,line_width,wafer,applied_pressure\nremoval_rate,150,nm/min,,,,4 psi\n,,,,,,\n"
+               "removal_rate,220,nm/min,,,,6 psi\n")
+    pts = _points(p)
+    assert [(q.line, q.value_si, q.conditions) for q in pts] == [(2, pytest.approx(2.5e-9), {"applied_pressure": "4 psi"}),
+                                                               (4, pytest.approx(220e-9 / 60), {"applied_pressure": "6 psi"})]
+    typo = _write(tmp_path, "typo.csv", "quantity,value,unit,aplied_pressure\nremoval_rate,150,nm/min,\n")
+    with pytest.raises(ValueError, match="unknown column 'aplied_pressure'"):  # a name no family knows is refused, filled or not
+        read_all([typo])
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("quantity;value;unit\nremoval_rate;150,5;nm/min\n", "separated by semicolons"),
+        ("quantity,value,unit\nremoval_rate,\"1,500\",A/min\n", r"'1,500' is not a number \(a thousands separator or a decimal comma"),
+    ],
+)
+def test_a_european_export_is_explained(tmp_path, text, message):
+    with pytest.raises(ValueError, match=message):
+        read_all([_write(tmp_path, "eu.csv", text)])
+
+
+def test_a_file_not_in_utf8_says_how_to_save_it(tmp_path):
+    p = _write(tmp_path, "l1.csv", "quantity,value,unit,time\nremoval,1.5,\u00b5m,60 s\n", encoding="latin-1")
+    with pytest.raises(ValueError, match=r"l1.csv' is not UTF-8 text.*CSV UTF-8"):
+        read_all([p])
+
+
+def test_a_free_input_the_data_do_not_depend_on_is_refused_and_nothing_written(tmp_path):
+    # wafer-mean rates do not depend on the metrology edge exclusion: its "fitted" value was wherever the optimiser left it
+    p = _write(tmp_path, "two.csv", f"{H}\nremoval_rate,150,nm/min,4 psi,60 rpm,oxide\nremoval_rate,220,nm/min,6 psi,60 rpm,oxide\n")
+    out = tmp_path / "cal.toml"
+    r = CliRunner().invoke(main, ["calibrate", str(p), "--free", "edge_exclusion", "--grid", "coarse", "--out", str(out), "--quiet"])
+    assert r.exit_code == 2, r.output
+    assert "--free edge_exclusion: the model's values at these data do not change with it" in r.output
+    assert not out.exists()

@@ -9,7 +9,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint"]
 
 
 @contextlib.contextmanager
@@ -54,7 +54,7 @@ def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} does not exist") from None
     except UnicodeDecodeError as exc:
-        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc}") from None
+        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc} (save it as UTF-8, e.g. a spreadsheet's 'CSV UTF-8')") from None
     except OSError as exc:
         raise error(f"cannot read {what} {str(path)!r}: {exc}") from None
 
@@ -99,8 +99,12 @@ def tidy_csv(text: str) -> str:
     if names != [h.strip() for h in header]:
         lines[body[0]] = _csv_line(names)
         changed = True
-    for i, row in zip(body[1:], csv.reader([lines[i] for i in body[1:]])):
-        if len(row) > n and not any(c.strip() for c in row[n:]):
+    for i in body[1:]:
+        row = next(csv.reader([lines[i]]), [])
+        if not any(c.strip() for c in row):  # ",,,,": a spreadsheet's empty row
+            lines[i] = ""
+            changed = True
+        elif len(row) > n and not any(c.strip() for c in row[n:]):
             lines[i] = _csv_line(row[:n])
             changed = True
     return "\n".join(lines) + "\n" if changed else text
@@ -110,3 +114,12 @@ def _csv_line(values) -> str:
     buf = io.StringIO()
     csv.writer(buf, lineterminator="").writerow(values)
     return buf.getvalue()
+
+
+def delimiter_hint(header_text: str) -> str:
+    """A hint for a header that is not comma-separated (``quantity;value;unit``): "" when it is."""
+    for sep, name in ((";", "semicolons"), ("\t", "tabs")):
+        if sep in header_text and "," not in header_text:
+            return (f" (the header is separated by {name}: cmpsim reads comma-separated files with a decimal point; "
+                    "export the sheet as CSV with ',' as the separator)")
+    return ""

@@ -53,6 +53,11 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+#: Norm of a Jacobian column (whitened residuals per unit fit variable, dimensionless) at or below which the data
+#: do not depend on a free input at all (an exact zero in practice: e.g. the edge exclusion for wafer-mean rates).
+ZERO_JACOBIAN = 1e-9
+
+
 def calibrate(
     data,
     free=None,
@@ -172,6 +177,11 @@ def calibrate(
     problem.callback = None
     # after: uncertainty at the optimum, then the model there
     J = central_jacobian(problem, z, n_pts, lower=lower, upper=upper)
+    flat = [n for k, n in enumerate(free) if np.all(np.isfinite(J[:, k])) and np.linalg.norm(J[:, k]) <= ZERO_JACOBIAN]
+    if flat:  # the optimiser moved it for nothing: its "fitted" value would be arbitrary
+        raise CalibrationError(f"--free {', '.join(flat)}: the model's values at these data do not change with "
+                               f"{'it' if len(flat) == 1 else 'them'} (column of the Jacobian zero at the fit): not identifiable from these data, "
+                               "nothing fitted; free inputs the data depend on (without --free the data choose them)")
     m1, res1, st1 = problem.model(z)
     r1 = problem.whiten(m1)
     chi2 = float(np.sum(r1 * r1))

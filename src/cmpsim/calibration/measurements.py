@@ -173,7 +173,7 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    from ..io import comments_and_rows, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, tidy_csv
 
     meta, body = comments_and_rows(tidy_csv(text))
     if not body:
@@ -183,7 +183,7 @@ def read_measurements(path, text: str | None = None) -> list:
     where0 = f"{path}:{hline}"
     for required in ("quantity", "value", "unit"):
         if required not in header:
-            raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})")
+            raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(htext))
     if len(set(header)) != len(header):
         raise MeasurementError(f"{where0}: a column name is repeated in the header")
     for col in header:

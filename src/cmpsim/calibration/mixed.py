@@ -107,12 +107,20 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
     groups = sorted({reader[f] for f in families})
     if not groups:
         return {"film": (text, rows)}  # no data row: the data-set reader says so ("no data rows")
-    if len(groups) == 1:
+    # a column of another family that no row fills (a template's structure columns, a wafer column without lots) is
+    # dropped; a name no family knows is still refused by the reader
+    empty = {k for k in range(len(header)) if not any(parsed[i][k].strip() for i in parsed)}
+    unknown_empty = [k for k in sorted(empty) if not all(_accepts(f, header[k]) for f in families)
+                     and any(_accepts(f, header[k]) for f in ("film", "structure", "pad", "lot"))]
+    if len(groups) == 1 and not unknown_empty:
         return {groups[0]: (text, rows)}  # one reader: it sees the file as it is and names a column it does not know
     out = {}
     for g in groups:
         fams = [f for f in families if reader[f] == g]
-        keep = [k for k, c in enumerate(header) if all(_accepts(f, c) for f in fams)]
+        if len(groups) == 1:  # the reader still names a filled column it does not know
+            keep = [k for k in range(len(header)) if k not in unknown_empty]
+        else:
+            keep = [k for k, c in enumerate(header) if all(_accepts(f, c) for f in fams)]
         new = []
         for i, ln in enumerate(lines, start=1):
             if i == body[0][0]:

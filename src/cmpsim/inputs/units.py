@@ -78,6 +78,11 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
     if not m or not m.group(2).strip():
         return value, unit
     inside = m.group(2).strip()
+    if not (inside[0].isalpha() or inside[0] in "%°µμÅ"):  # "1,500" or "1.5.2": not a number and a unit; the reader says it is no number
+        if inside[0] == "," and inside[1:].isdigit():
+            raise ValueError(f"{value!r} is not a number (a thousands separator or a decimal comma? write the number with a decimal "
+                             "point and no separator)")
+        return value, unit
     if unit.strip() and inside.replace(" ", "").lower() != unit.replace(" ", "").lower():
         raise ValueError(f"{value!r} carries the unit {inside!r} but the unit column says {unit!r}; give the unit in one place")
     return m.group(1), inside

@@ -261,7 +261,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import comments_and_rows, read_text, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, read_text, tidy_csv
 
     path = Path(path)
     if text is None:
@@ -274,7 +274,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     where0 = f"{path}:{header_line}"
     for required in ("quantity", "value", "unit"):
         if required not in header:
-            raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})")
+            raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(header_text))
     if len(set(header)) != len(header):
         raise DataError(f"{where0}: duplicate column names in the header")
     for col in header:
