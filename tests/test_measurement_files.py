@@ -239,3 +239,24 @@ def test_a_free_input_the_data_do_not_depend_on_is_refused_and_nothing_written(t
     assert r.exit_code == 2, r.output
     assert "--free edge_exclusion: the model's values at these data do not change with it" in r.output
     assert not out.exists()
+
+
+def test_an_uncertainty_printed_with_its_plus_minus_sign(tmp_path):
+    p = _write(tmp_path, "pm.csv", "quantity,value,unit,uncertainty,process,line_width,wafer,time\nremoval_rate,150,nm/min,±10,,,,\n"
+               "dishing,50,nm,+/- 4,copper,1 um,,\nthickness,500,nm,+-5 nm,,,1,\npad_temperature_rise,9,K,± 1 K,,,,60 s\n")
+    m = read_all([p])
+    assert m.datasets[0].points[0].uncertainty_si == pytest.approx(10e-9 / 60)
+    assert (m.structures[0].uncertainty, m.lots[0].uncertainty, m.pad[0].uncertainty) == pytest.approx((4e-9, 5e-9, 1.0))
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "quantity,value,unit,uncertainty\nfriction_coefficient,0.3,,5%\n",  # 5 % of 0.3, or 0.05? it was read as 5
+        "quantity,value,unit,uncertainty\nfluid_load_fraction,0.5,1,5%\n",
+        "quantity,value,unit,uncertainty,wafer\nthickness,500,nm,5 A,1\n",
+    ],
+)
+def test_an_uncertainty_in_another_unit_than_its_value_is_not_guessed(tmp_path, text):
+    with pytest.raises(ValueError, match=r"u.csv:2: row 1, column 'uncertainty'"):
+        read_all([_write(tmp_path, "u.csv", text)])

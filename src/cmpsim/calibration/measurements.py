@@ -202,14 +202,17 @@ def read_measurements(path, text: str | None = None) -> list:
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
                                    f"{', '.join(list(STRUCTURE_QUANTITIES) + list(THERMAL_QUANTITIES))}")
-        from ..inputs.units import value_and_unit
+        from ..inputs.units import uncertainty_text, value_and_unit
 
         try:  # a value written with its unit ("50 nm"), the unit column empty or the same
             rec["value"], rec["unit"] = value_and_unit(rec["value"], rec["unit"])
-            if rec.get("uncertainty"):
-                rec["uncertainty"] = value_and_unit(rec["uncertainty"], rec["unit"])[0]
         except ValueError as exc:
             raise MeasurementError(f"{where}: column 'value': {exc}") from None
+        if rec.get("uncertainty"):  # "±4 nm": its unit must be the value's (the unit column's; none for a plain number)
+            try:
+                rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
+            except ValueError as exc:
+                raise MeasurementError(f"{where}: column 'uncertainty': {exc}") from None
         if not rec["value"]:
             raise MeasurementError(f"{where}: column 'value' is empty")
         if not rec["unit"] and q != "friction_coefficient":

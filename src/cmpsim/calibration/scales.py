@@ -63,7 +63,7 @@ class ScaleCalibration:
             for n in self.film.free:
                 lo, hi = self.film.ci95[n]
                 rows.append(["film", n, format_display(n, self.film.values[n]),
-                             f"[{format_display(n, lo) if np.isfinite(lo) else '-'}, {format_display(n, hi) if np.isfinite(hi) else '-'}]",
+                             f"[{format_display(n, lo) if np.isfinite(lo) else '-'}, {format_display(n, hi) if np.isfinite(hi) else 'inf' if hi > 0 else '-'}]",
                              PARAMETERS[n].display or "-"])
         if self.die is not None:
             for n in self.die.free:

@@ -24,7 +24,7 @@ import re
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["normalise_unit", "value_and_unit", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
+__all__ = ["normalise_unit", "value_and_unit", "uncertainty_text", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
 ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "a/s": "angstrom/second", "å/s": "angstrom/second", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
@@ -86,6 +86,11 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
     if unit.strip() and inside.replace(" ", "").lower() != unit.replace(" ", "").lower():
         raise ValueError(f"{value!r} carries the unit {inside!r} but the unit column says {unit!r}; give the unit in one place")
     return m.group(1), inside
+
+
+def uncertainty_text(text: str) -> str:
+    """An uncertainty cell without the plus-minus sign papers print before it (``"±10"``, ``"+/- 10"``, ``"+-10"``)."""
+    return re.sub(r"^\s*(±|\+/-|\+-)\s*", "", text)
 
 
 def _is_pressure(target: str) -> bool:

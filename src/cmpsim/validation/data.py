@@ -205,7 +205,7 @@ class DataPoint:
 
 def _short(value: float, unit: str) -> str:
     if unit == "m":
-        return f"{value * 1e3:g} mm" if value >= 1e-3 else f"{value * 1e9:g} nm"
+        return f"{value * 1e3:g} mm" if value >= 1e-3 or value == 0 else f"{value * 1e9:g} nm"  # a radius of 0 is the centre, in mm
     return f"{value:g} s"
 
 
@@ -389,12 +389,14 @@ def _one_unit(ds: Dataset) -> None:
 
 def _uncertainty(text: str, unit: str, quantity: str, where: str, bad) -> float:
     """The uncertainty cell in the row's ``unit``: a number, or a number with a unit of the quantity (``"10 nm/min"``)."""
-    number, own = units.value_and_unit(text, "")
+    number, own = units.value_and_unit(units.uncertainty_text(text), "")
     try:
         u = _parse_float(number, "uncertainty", where)
     except DataError as exc:
         raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
     if own and own.replace(" ", "").lower() != unit.replace(" ", "").lower():
+        if own.strip() in ("%", "percent"):  # 5 % of a fraction given in 1, or 5 % of the value? not guessed
+            raise bad("uncertainty", f"{text!r}: a relative uncertainty in % is not read; give it in {unit or 'the unit column'}'s unit")
         try:
             u = to_si(u, own, quantity) - to_si(0.0, own, quantity)
             u = from_si(u, unit, quantity) - from_si(0.0, unit, quantity)
