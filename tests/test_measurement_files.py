@@ -260,3 +260,11 @@ def test_an_uncertainty_printed_with_its_plus_minus_sign(tmp_path):
 def test_an_uncertainty_in_another_unit_than_its_value_is_not_guessed(tmp_path, text):
     with pytest.raises(ValueError, match=r"u.csv:2: row 1, column 'uncertainty'"):
         read_all([_write(tmp_path, "u.csv", text)])
+
+
+def test_names_in_capitals_read(tmp_path):
+    p = _write(tmp_path, "caps.csv", "Quantity,Value,Unit,Comparison,Film,Process,Line_Width,Applied_Pressure\n"
+               "Removal_Rate,150,nm/min,Shape,Oxide,,,4 psi\nREMOVAL_RATE,220,nm/min,shape,OXIDE,,,6 psi\nDishing,50,nm,,,Copper,10 um,\n")
+    m = read_all([p])
+    assert [(q.quantity, q.comparison, q.film) for q in m.datasets[0].points] == [("removal_rate", "shape", "oxide")] * 2
+    assert (m.structures[0].quantity, m.structures[0].process) == ("dishing", "copper")

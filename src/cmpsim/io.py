@@ -79,9 +79,14 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
     return meta, body
 
 
+#: Columns whose cells are names (of a quantity, a comparison, a process, a film), read in lower case.
+NAME_COLUMNS = ("quantity", "comparison", "process", "film")
+
+
 def tidy_csv(text: str) -> str:
     """A data file's text as a spreadsheet's export of it is meant: the header's column names in lower case
-    and without the empty names of trailing commas; a row's trailing empty fields beyond the header dropped.
+    and without the empty names of trailing commas; a row's trailing empty fields beyond the header dropped;
+    the cells of :data:`NAME_COLUMNS` in lower case (``Dishing``, ``Copper``).
 
     Lines keep their numbers (a changed line is rewritten in place), so messages still name the file's
     lines; a row with a filled field beyond the header is left for the reader to refuse.
@@ -104,9 +109,12 @@ def tidy_csv(text: str) -> str:
         if not any(c.strip() for c in row):  # ",,,,": a spreadsheet's empty row
             lines[i] = ""
             changed = True
-        elif len(row) > n and not any(c.strip() for c in row[n:]):
-            lines[i] = _csv_line(row[:n])
-            changed = True
+        else:
+            keep = row[:n] if len(row) > n and not any(c.strip() for c in row[n:]) else row
+            named = [c.lower() if k < len(names) and names[k] in NAME_COLUMNS else c for k, c in enumerate(keep)]
+            if named != row:
+                lines[i] = _csv_line(named)
+                changed = True
     return "\n".join(lines) + "\n" if changed else text
 
 

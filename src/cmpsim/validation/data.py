@@ -311,6 +311,11 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             rec["value"], rec["unit"] = units.value_and_unit(rec["value"], rec["unit"])
         except ValueError as exc:
             raise bad("value", str(exc)) from None
+        if not rec["value"]:
+            raise bad("value", "the value is empty (a measured number, in the unit column's unit)")
+        if not rec["unit"] and quantity_unit(quantity) != "dimensionless":
+            raise bad("unit", f"the unit is empty; a {quantity} needs a unit convertible to {quantity_unit(quantity)} "
+                              f"(e.g. {DEPTH_QUANTITIES[quantity][1] if quantity in DEPTH_QUANTITIES else QUANTITIES[quantity][1]})")
         try:
             value = _parse_float(rec["value"], "value", where)
         except DataError as exc:
@@ -396,7 +401,7 @@ def _uncertainty(text: str, unit: str, quantity: str, where: str, bad) -> float:
         raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
     if own and own.replace(" ", "").lower() != unit.replace(" ", "").lower():
         if own.strip() in ("%", "percent"):  # 5 % of a fraction given in 1, or 5 % of the value? not guessed
-            raise bad("uncertainty", f"{text!r}: a relative uncertainty in % is not read; give it in {unit or 'the unit column'}'s unit")
+            raise bad("uncertainty", f"{text!r}: a relative uncertainty in % is not read; give it in {unit or 'the unit of the value'}")
         try:
             u = to_si(u, own, quantity) - to_si(0.0, own, quantity)
             u = from_si(u, unit, quantity) - from_si(0.0, unit, quantity)
