@@ -292,7 +292,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     if "radius" in header and "x" in header:
         raise DataError(f"{where0}: header, column 'radius': give radius or x and y, not both")
     default_name = meta.get("dataset") or path.stem
-    default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,")
+    default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,").lower()
     datasets: dict[str, Dataset] = {}
     rows = csv.reader([t for _, t in body_lines[1:]])
     for row_no, ((lineno, _), row) in enumerate(zip(body_lines[1:], rows), start=1):
