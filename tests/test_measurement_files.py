@@ -268,3 +268,12 @@ def test_names_in_capitals_read(tmp_path):
     m = read_all([p])
     assert [(q.quantity, q.comparison, q.film) for q in m.datasets[0].points] == [("removal_rate", "shape", "oxide")] * 2
     assert (m.structures[0].quantity, m.structures[0].process) == ("dishing", "copper")
+
+
+def test_a_line_break_inside_a_cell_is_refused_naming_its_line(tmp_path):
+    # the readers number rows by lines: a cell over two lines shifted every later row's line (and a mixed file's rows)
+    p = _write(tmp_path, "nl.csv", 'quantity,value,unit,note\nremoval_rate,150,nm/min,"two\nlines"\nremoval_rate,160,nm/min,x\n')
+    with pytest.raises(ValueError, match=r"nl.csv:2: a quoted field runs past the end of the line"):
+        read_all([p])
+    ok = _write(tmp_path, "q.csv", 'quantity,value,unit,note\nremoval_rate,150,nm/min,"a 5"" wafer, polished"\n')
+    assert _points(ok)[0].value_si == pytest.approx(2.5e-9)

@@ -83,13 +83,15 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
 NAME_COLUMNS = ("quantity", "comparison", "process", "film")
 
 
-def tidy_csv(text: str) -> str:
+def tidy_csv(text: str, path="") -> str:
     """A data file's text as a spreadsheet's export of it is meant: the header's column names in lower case
     and without the empty names of trailing commas; a row's trailing empty fields beyond the header dropped;
     the cells of :data:`NAME_COLUMNS` in lower case (``Dishing``, ``Copper``).
 
     Lines keep their numbers (a changed line is rewritten in place), so messages still name the file's
-    lines; a row with a filled field beyond the header is left for the reader to refuse.
+    lines; a row with a filled field beyond the header is left for the reader to refuse. A quoted field
+    that runs past the end of its line (a line break inside a cell) raises ValueError naming ``path`` and
+    the line: the readers number rows by lines.
     """
     lines = text.splitlines()
     body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.strip().startswith("#")]
@@ -104,8 +106,17 @@ def tidy_csv(text: str) -> str:
     if names != [h.strip() for h in header]:
         lines[body[0]] = _csv_line(names)
         changed = True
-    for i in body[1:]:
-        row = next(csv.reader([lines[i]]), [])
+    for i in body:
+        try:
+            row = next(csv.reader([lines[i]], strict=True), [])
+        except csv.Error as exc:
+            if "end of data" not in str(exc):  # another irregular quote ('"a"b'): read as before, leniently
+                row = next(csv.reader([lines[i]]), [])
+            else:
+                raise ValueError(f"{path}:{i + 1}: a quoted field runs past the end of the line (a line break inside a cell); "
+                                 "keep each row on one line") from None
+        if i == body[0]:
+            continue
         if not any(c.strip() for c in row):  # ",,,,": a spreadsheet's empty row
             lines[i] = ""
             changed = True

@@ -85,7 +85,7 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
     path = Path(path)
     from ..io import comments_and_rows, tidy_csv
 
-    meta, body = comments_and_rows(tidy_csv(text))
+    meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
         raise LotDataError(f"{path}: no header row and no data rows")
     header = [h.strip() for h in next(csv.reader([body[0][1]]))]

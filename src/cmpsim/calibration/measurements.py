@@ -175,7 +175,7 @@ def read_measurements(path, text: str | None = None) -> list:
         text = read_text(path, "measurement file", MeasurementError)
     from ..io import comments_and_rows, delimiter_hint, tidy_csv
 
-    meta, body = comments_and_rows(tidy_csv(text))
+    meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
         raise MeasurementError(f"{path}: no header row and no data rows (format: cmpsim/data/README.md, docs/calibrate-die.md)")
     hline, htext = body[0]

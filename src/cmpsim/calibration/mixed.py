@@ -158,7 +158,7 @@ def read_all(paths) -> Measurements:
     out = Measurements()
     for p in [paths] if isinstance(paths, (str, Path)) else list(paths):
         path = Path(p)
-        text = tidy_csv(read_text(path, "data file", MixedDataError))
+        text = tidy_csv(read_text(path, "data file", MixedDataError), path)
         out.paths.append(str(path))
         for group, (sub, rows) in _split(path, text).items():
             try:

@@ -266,7 +266,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     path = Path(path)
     if text is None:
         text = read_text(path, "data file", DataError)
-    meta, body_lines = comments_and_rows(tidy_csv(text))
+    meta, body_lines = comments_and_rows(tidy_csv(text, path))
     if not body_lines:
         raise DataError(f"{path}: no header row and no data rows (see cmpsim/data/README.md for the format)")
     header_line, header_text = body_lines[0]
