@@ -277,3 +277,11 @@ def test_a_line_break_inside_a_cell_is_refused_naming_its_line(tmp_path):
         read_all([p])
     ok = _write(tmp_path, "q.csv", 'quantity,value,unit,note\nremoval_rate,150,nm/min,"a 5"" wafer, polished"\n')
     assert _points(ok)[0].value_si == pytest.approx(2.5e-9)
+
+
+def test_calibrate_never_writes_over_its_own_data(tmp_path):
+    p = _write(tmp_path, "d.csv", f"{H}\nremoval_rate,150,nm/min,4 psi,60 rpm,oxide\n")
+    before = p.read_bytes()
+    r = CliRunner().invoke(main, ["calibrate", str(p), "--out", str(p), "--quiet"])
+    assert r.exit_code == 2 and "is one of the input files" in r.output, r.output
+    assert p.read_bytes() == before
