@@ -285,3 +285,14 @@ def test_calibrate_never_writes_over_its_own_data(tmp_path):
     r = CliRunner().invoke(main, ["calibrate", str(p), "--out", str(p), "--quiet"])
     assert r.exit_code == 2 and "is one of the input files" in r.output, r.output
     assert p.read_bytes() == before
+
+
+@pytest.mark.parametrize("text", ["93 1/min", "93 min^-1", "93 min-1", "1.55 Hz"])
+def test_a_rotation_speed_without_an_angle_is_refused(tmp_path, text):
+    # pint's radian is dimensionless: 93 1/min was read as 93 rad/min, 2 pi times slower than the 93 rpm it means
+    with pytest.raises(ValueError, match="is a frequency without an angle"):
+        units.to_si(text, "rad/s", "rotation_speed")
+    p = _write(tmp_path, "r.csv", f"quantity,value,unit,rotation_speed\nremoval_rate,150,nm/min,{text}\n")
+    with pytest.raises(ValueError, match=r"r.csv:2: row 1, column 'rotation_speed': .*without an angle"):
+        read_all([p])
+    assert units.to_si("93 rev/min", "rad/s") == pytest.approx(93 * 2 * math.pi / 60)

@@ -152,14 +152,31 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
             raise ValueError(f"{name} must be a number with units of {unit or 'none'}; got {value!r}") from None
     target = unit or "dimensionless"
     try:
-        return float(q.to(target).magnitude)
+        out = float(q.to(target).magnitude)
     except Exception:
         fixed = _normalised_quantity(value, unit) if isinstance(value, str) else None
         if fixed is not None:
+            _check_angle(fixed, target, name, value)
             return float(fixed.to(target).magnitude)
         raise ValueError(
             f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r} (e.g. {example or target})"
         ) from None
+    _check_angle(q, target, name, value)
+    return out
+
+
+#: Words of pint's angle units: a rotation speed must name one (``rpm``, ``rad/s``, ``deg/s``, ``rev/min``).
+_ANGLE_WORDS = ("radian", "revolution", "degree", "turn", "cycle", "arcminute", "arcsecond", "gradian")
+
+
+def _check_angle(q, target: str, name: str, value) -> None:
+    """Refuse a rotation speed given as a bare frequency (``60 1/min``, ``1 Hz``): pint's radian is
+    dimensionless, so it would be read as radians per time, 2 pi times slower than the revolutions it usually means."""
+    if not (target.startswith("rad/") and hasattr(q, "units")):  # an angular velocity only (an angle may be a plain number)
+        return
+    if not any(w in str(q.units) for w in _ANGLE_WORDS):
+        raise ValueError(f"{name}: {value!r} is a frequency without an angle (revolutions or radians per time?); "
+                         "write rpm (revolutions per minute), rev/s or rad/s")
 
 
 def convert(value: float, unit: str, to: str) -> float:
