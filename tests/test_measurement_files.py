@@ -296,3 +296,12 @@ def test_a_rotation_speed_without_an_angle_is_refused(tmp_path, text):
     with pytest.raises(ValueError, match=r"r.csv:2: row 1, column 'rotation_speed': .*without an angle"):
         read_all([p])
     assert units.to_si("93 rev/min", "rad/s") == pytest.approx(93 * 2 * math.pi / 60)
+
+
+def test_a_fit_that_mixes_points_with_and_without_uncertainty_says_how_it_weighted_them(tmp_path):
+    from cmpsim.calibration import calibrate
+
+    p = _write(tmp_path, "m.csv", "quantity,value,unit,uncertainty,applied_pressure,rotation_speed,film\n"
+               "removal_rate,150,nm/min,10,4 psi,60 rpm,oxide\nremoval_rate,220,nm/min,,6 psi,60 rpm,oxide\n")
+    cal = calibrate(read_all([p]).datasets, ["mechanical_factor_oxide"], grid="coarse")
+    assert any("1 of 2 points have no uncertainty" in n for n in cal.notes)

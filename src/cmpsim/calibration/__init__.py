@@ -187,6 +187,10 @@ def calibrate(
     chi2 = float(np.sum(r1 * r1))
     values = problem.values_of(z)
     unc = uncertainty(J, chi2, dof, problem.absolute_sigma, values, log, scale, bnds)
+    given = sum(p.uncertainty is not None and p.comparison in ("absolute", "range", "shape") for _, p in problem.points)
+    if 0 < given < n_pts:  # say how the two kinds of point were weighted against each other
+        unc.notes.append(f"{n_pts - given} of {n_pts} points have no uncertainty: each is weighted as if its uncertainty were its own "
+                         f"value (its relative error), the other {given} by their uncertainty; give every point one, or none")
     failed = int((~np.isfinite(m1)).sum())
     if failed:
         unc.notes.append(f"{failed} point(s) have no equilibrium at the fitted values (penalised with a residual of {FAILED_POINT_PENALTY:g})")
