@@ -305,3 +305,10 @@ def test_a_fit_that_mixes_points_with_and_without_uncertainty_says_how_it_weight
                "removal_rate,150,nm/min,10,4 psi,60 rpm,oxide\nremoval_rate,220,nm/min,,6 psi,60 rpm,oxide\n")
     cal = calibrate(read_all([p]).datasets, ["mechanical_factor_oxide"], grid="coarse")
     assert any("1 of 2 points have no uncertainty" in n for n in cal.notes)
+
+
+def test_a_misspelt_free_name_is_named_as_unknown(tmp_path):
+    # with only test structures, a typo of a die constant was reported as needing "removal or other wafer-scale rows"
+    p = _write(tmp_path, "d.csv", "quantity,value,unit,process,line_width\ndishing,50,nm,copper,10 um\n")
+    r = CliRunner().invoke(main, ["calibrate", str(p), "--free", "contact_hieght", "--out", str(tmp_path / "c.toml"), "--quiet"])
+    assert r.exit_code == 2 and "--free contact_hieght: unknown parameter 'contact_hieght'; did you mean contact_height" in r.output, r.output
