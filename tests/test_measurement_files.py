@@ -312,3 +312,14 @@ def test_a_misspelt_free_name_is_named_as_unknown(tmp_path):
     p = _write(tmp_path, "d.csv", "quantity,value,unit,process,line_width\ndishing,50,nm,copper,10 um\n")
     r = CliRunner().invoke(main, ["calibrate", str(p), "--free", "contact_hieght", "--out", str(tmp_path / "c.toml"), "--quiet"])
     assert r.exit_code == 2 and "--free contact_hieght: unknown parameter 'contact_hieght'; did you mean contact_height" in r.output, r.output
+
+
+def test_units_after_every_value_need_no_unit_column(tmp_path):
+    p = _write(tmp_path, "nu.csv", "quantity,value,applied_pressure,process,line_width,time\nremoval_rate,150 nm/min,4 psi,,,\n"
+               "removal_rate,2.2e3 A/min,6 psi,,,\ndishing,50 nm,,copper,10 um,\npad_temperature_rise,9 K,,,,60 s\n")
+    m = read_all([p])
+    assert [q.value_si for q in m.datasets[0].points] == pytest.approx([2.5e-9, 220e-9 / 60])
+    assert (m.structures[0].value, m.pad[0].value) == pytest.approx((5e-8, 9.0))
+    bad = _write(tmp_path, "nu2.csv", "quantity,value\nremoval_rate,150 nm/min\nremoval_rate,160\n")
+    with pytest.raises(ValueError, match=r"nu2.csv:1: required column 'unit' is missing .*line 3, row 2 has none"):
+        read_all([bad])

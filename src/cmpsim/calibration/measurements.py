@@ -181,7 +181,7 @@ def read_measurements(path, text: str | None = None) -> list:
     hline, htext = body[0]
     header = [h.strip() for h in next(csv.reader([htext]))]
     where0 = f"{path}:{hline}"
-    for required in ("quantity", "value", "unit"):
+    for required in ("quantity", "value"):  # the unit: a column, or after each value ("50 nm")
         if required not in header:
             raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(htext))
     if len(set(header)) != len(header):
@@ -198,6 +198,7 @@ def read_measurements(path, text: str | None = None) -> list:
         if len(row) != len(header):
             raise MeasurementError(f"{where}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
         rec = {h: c.strip() for h, c in zip(header, row)}
+        rec.setdefault("unit", "")
         q = rec["quantity"]
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
@@ -213,10 +214,13 @@ def read_measurements(path, text: str | None = None) -> list:
                 rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
             except ValueError as exc:
                 raise MeasurementError(f"{where}: column 'uncertainty': {exc}") from None
+        if "unit" not in header and not rec["unit"] and rec["value"] and q != "friction_coefficient":
+            raise MeasurementError(f"{where0}: required column 'unit' is missing (header: {', '.join(header)}); give it, or the unit after "
+                                   f"every value ('50 nm'): line {lineno} has none")
         if not rec["value"]:
             raise MeasurementError(f"{where}: column 'value' is empty")
         if not rec["unit"] and q != "friction_coefficient":
-            raise MeasurementError(f"{where}: column 'unit' is empty")
+            raise MeasurementError(f"{where}: column 'unit' is empty (give the unit in the unit column or after the value: '50 nm')")
         target = (STRUCTURE_QUANTITIES.get(q) or THERMAL_QUANTITIES[q])[0]
         try:
             float(rec["value"])

@@ -272,7 +272,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     header_line, header_text = body_lines[0]
     header = [h.strip() for h in next(csv.reader([header_text]))]
     where0 = f"{path}:{header_line}"
-    for required in ("quantity", "value", "unit"):
+    for required in ("quantity", "value"):  # the unit: a column, or after each value ("150 nm/min")
         if required not in header:
             raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(header_text))
     if len(set(header)) != len(header):
@@ -304,6 +304,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         if len(row) != len(header):
             raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}")
         rec = {h: c.strip() for h, c in zip(header, row)}
+        rec.setdefault("unit", "")
         quantity = rec["quantity"]
         if quantity not in QUANTITIES and quantity not in DEPTH_QUANTITIES:
             raise bad("quantity", f"unknown quantity {quantity!r}; known: {', '.join(known_quantities())}")
@@ -311,11 +312,15 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             rec["value"], rec["unit"] = units.value_and_unit(rec["value"], rec["unit"])
         except ValueError as exc:
             raise bad("value", str(exc)) from None
+        if "unit" not in header and not rec["unit"] and rec["value"]:
+            raise DataError(f"{where0}: required column 'unit' is missing (header: {', '.join(header)}); give it, or the unit after every "
+                            f"value ('150 nm/min'): line {lineno}, row {row_no} has none")
         if not rec["value"]:
             raise bad("value", "the value is empty (a measured number, in the unit column's unit)")
         if not rec["unit"] and quantity_unit(quantity) != "dimensionless":
             raise bad("unit", f"the unit is empty; a {quantity} needs a unit convertible to {quantity_unit(quantity)} "
-                              f"(e.g. {DEPTH_QUANTITIES[quantity][1] if quantity in DEPTH_QUANTITIES else QUANTITIES[quantity][1]})")
+                              f"(e.g. {DEPTH_QUANTITIES[quantity][1] if quantity in DEPTH_QUANTITIES else QUANTITIES[quantity][1]}), "
+                              "in the unit column or after the value")
         try:
             value = _parse_float(rec["value"], "value", where)
         except DataError as exc:
