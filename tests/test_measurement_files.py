@@ -323,3 +323,14 @@ def test_units_after_every_value_need_no_unit_column(tmp_path):
     bad = _write(tmp_path, "nu2.csv", "quantity,value\nremoval_rate,150 nm/min\nremoval_rate,160\n")
     with pytest.raises(ValueError, match=r"nu2.csv:1: required column 'unit' is missing .*line 3, row 2 has none"):
         read_all([bad])
+
+
+def test_units_in_the_header(tmp_path):
+    # a spreadsheet's "value (nm/min)" and "applied_pressure [psi]": the unit of every plain number below it
+    p = _write(tmp_path, "hu.csv", "Quantity,Value (nm/min),Uncertainty (nm/min),Applied_Pressure [psi],rotation_speed (rpm),wafer (#)\n"
+               "removal_rate,150,10,4,60,\nremoval_rate,2200 A/min,,6 psi,60,\nthickness,500 nm,,,,1\n")
+    m = read_all([p])
+    a, b = m.datasets[0].points
+    assert (a.value_si, a.uncertainty_si, b.value_si) == pytest.approx((2.5e-9, 10e-9 / 60, 220e-9 / 60))
+    assert a.conditions == {"applied_pressure": "4 psi", "rotation_speed": "60 rpm"} and b.conditions["applied_pressure"] == "6 psi"
+    assert (m.lots[0].wafer, m.lots[0].value) == (1, pytest.approx(5e-7))

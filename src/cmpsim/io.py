@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import csv
 import io
+import re
 import os
 import tempfile
 from pathlib import Path
@@ -81,12 +82,16 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
 
 #: Columns whose cells are names (of a quantity, a comparison, a process, a film), read in lower case.
 NAME_COLUMNS = ("quantity", "comparison", "process", "film")
+#: Columns that hold no quantity: a unit in their header (``wafer (#)``) is dropped, not given to their cells.
+TEXT_COLUMNS = NAME_COLUMNS + ("dataset", "wafer", "source", "label", "note", "unit")
+_HEADER_UNIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*[\(\[]\s*(.*?)\s*[\)\]]\s*$")
 
 
 def tidy_csv(text: str, path="") -> str:
     """A data file's text as a spreadsheet's export of it is meant: the header's column names in lower case
     and without the empty names of trailing commas; a row's trailing empty fields beyond the header dropped;
-    the cells of :data:`NAME_COLUMNS` in lower case (``Dishing``, ``Copper``).
+    the cells of :data:`NAME_COLUMNS` in lower case (``Dishing``, ``Copper``); a unit in a column's header
+    (``value (nm/min)``, ``applied_pressure [psi]``) written after each plain number of the column.
 
     Lines keep their numbers (a changed line is rewritten in place), so messages still name the file's
     lines; a row with a filled field beyond the header is left for the reader to refuse. A quoted field
@@ -101,7 +106,12 @@ def tidy_csv(text: str, path="") -> str:
     n = len(header)
     while n > 1 and not header[n - 1].strip():
         n -= 1
-    names = [h.strip().lower() for h in header[:n]]
+    names, header_units = [], {}
+    for k, h in enumerate(header[:n]):  # "value (nm/min)", "applied_pressure [psi]": the unit of the column's plain numbers
+        m = _HEADER_UNIT.match(h)
+        names.append((m.group(1) if m else h.strip()).lower())
+        if m and m.group(2) and names[-1] not in TEXT_COLUMNS:
+            header_units[k] = m.group(2)
     changed = False
     if names != [h.strip() for h in header]:
         lines[body[0]] = _csv_line(names)
@@ -122,11 +132,20 @@ def tidy_csv(text: str, path="") -> str:
             changed = True
         else:
             keep = row[:n] if len(row) > n and not any(c.strip() for c in row[n:]) else row
-            named = [c.lower() if k < len(names) and names[k] in NAME_COLUMNS else c for k, c in enumerate(keep)]
+            named = [c.lower() if k < len(names) and names[k] in NAME_COLUMNS
+                     else f"{c.strip()} {header_units[k]}" if k in header_units and _is_number(c) else c for k, c in enumerate(keep)]
             if named != row:
                 lines[i] = _csv_line(named)
                 changed = True
     return "\n".join(lines) + "\n" if changed else text
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 
 
 def _csv_line(values) -> str:
