@@ -334,3 +334,10 @@ def test_units_in_the_header(tmp_path):
     assert (a.value_si, a.uncertainty_si, b.value_si) == pytest.approx((2.5e-9, 10e-9 / 60, 220e-9 / 60))
     assert a.conditions == {"applied_pressure": "4 psi", "rotation_speed": "60 rpm"} and b.conditions["applied_pressure"] == "6 psi"
     assert (m.lots[0].wafer, m.lots[0].value) == (1, pytest.approx(5e-7))
+
+
+def test_text_handed_over_with_a_byte_order_mark(tmp_path):
+    from cmpsim.validation.data import load_datasets
+
+    (ds,) = load_datasets(tmp_path / "up.csv", text="\ufeffquantity,value,unit\nremoval_rate,150,nm/min\n")
+    assert ds.points[0].value_si == pytest.approx(2.5e-9)

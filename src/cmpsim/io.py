@@ -98,6 +98,8 @@ def tidy_csv(text: str, path="") -> str:
     that runs past the end of its line (a line break inside a cell) raises ValueError naming ``path`` and
     the line: the readers number rows by lines.
     """
+    if text.startswith("\ufeff"):  # a byte-order mark in text handed over already decoded (an upload, the API)
+        text = text[1:]
     lines = text.splitlines()
     body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.strip().startswith("#")]
     if not body:
