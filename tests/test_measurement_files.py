@@ -209,7 +209,7 @@ def test_a_template_with_empty_rows_and_the_columns_of_other_families(tmp_path):
     assert [(q.line, q.value_si, q.conditions) for q in pts] == [(2, pytest.approx(2.5e-9), {"applied_pressure": "4 psi"}),
                                                                (4, pytest.approx(220e-9 / 60), {"applied_pressure": "6 psi"})]
     typo = _write(tmp_path, "typo.csv", "quantity,value,unit,aplied_pressure\nremoval_rate,150,nm/min,\n")
-    with pytest.raises(ValueError, match="unknown column 'aplied_pressure'"):  # a name no family knows is refused, filled or not
+    with pytest.raises(ValueError, match="unknown column 'aplied_pressure'.*did you mean applied_pressure"):  # a name no family knows is refused, filled or not
         read_all([typo])
 
 

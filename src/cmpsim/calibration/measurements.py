@@ -189,8 +189,11 @@ def read_measurements(path, text: str | None = None) -> list:
     for col in header:
         if col in _COMMON or col in _STRUCTURE_COLUMNS or col in DIE_PARAMETERS or col in _THERMAL_EXTRA or col in PARAMETERS:
             continue
+        from ..validation.data import _near
+
         raise MeasurementError(f"{where0}: unknown column {col!r}: use the columns of docs/calibrate-die.md, die inputs "
-                               f"({', '.join(DIE_PARAMETERS)}) or cmpsim parameter names")
+                               f"({', '.join(DIE_PARAMETERS)}) or cmpsim parameter names"
+                               + _near(col, [*_COMMON, *_STRUCTURE_COLUMNS, *DIE_PARAMETERS, *_THERMAL_EXTRA, *PARAMETERS]))
     default_name = meta.get("dataset") or path.stem
     out = []
     for (lineno, _), row in zip(body[1:], csv.reader([t for _, t in body[1:]])):

@@ -284,6 +284,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             raise DataError(
                 f"{where0}: header, column {col!r}: unknown column {col!r}: condition columns must be cmpsim parameter names "
                 f"(see `cmpsim params`), {', '.join(EXTRA_CONDITIONS)}, or the position and time columns {', '.join(POINT_COLUMNS)}"
+                + _near(col, [*META_COLUMNS, *EXTRA_CONDITIONS, *POINT_COLUMNS, *PARAMETERS])
             )
         if PARAMETERS[col].section == "numerics" and col != "model":
             raise DataError(f"{where0}: header, column {col!r}: column {col!r} is a numerical setting, not an operating condition")
@@ -381,6 +382,14 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             if len(ds.points) < 2:
                 raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
     return list(datasets.values())
+
+
+def _near(name: str, names) -> str:
+    """"; did you mean X?" for the names close to a misspelt ``name`` ("" when none is close)."""
+    import difflib
+
+    near = difflib.get_close_matches(name, list(names), n=3)
+    return f"; did you mean {', '.join(near)}?" if near else ""
 
 
 def _one_unit(ds: Dataset) -> None:
