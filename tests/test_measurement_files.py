@@ -252,7 +252,7 @@ def test_an_uncertainty_printed_with_its_plus_minus_sign(tmp_path):
 @pytest.mark.parametrize(
     "text",
     [
-        "quantity,value,unit,uncertainty\nfriction_coefficient,0.3,,5%\n",  # 5 % of 0.3, or 0.05? it was read as 5
+        "quantity,value,unit,uncertainty\nfriction_coefficient,0.3,,5%\n",  # 5 % of 0.3, or 0.05? not guessed
         "quantity,value,unit,uncertainty\nfluid_load_fraction,0.5,1,5%\n",
         "quantity,value,unit,uncertainty,wafer\nthickness,500,nm,5 A,1\n",
     ],
