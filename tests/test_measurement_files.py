@@ -341,3 +341,9 @@ def test_text_handed_over_with_a_byte_order_mark(tmp_path):
 
     (ds,) = load_datasets(tmp_path / "up.csv", text="\ufeffquantity,value,unit\nremoval_rate,150,nm/min\n")
     assert ds.points[0].value_si == pytest.approx(2.5e-9)
+
+
+def test_a_quantity_in_words_suggests_its_name(tmp_path):
+    p = _write(tmp_path, "q.csv", "quantity,value,unit\nremoval rate,150,nm/min\n")
+    with pytest.raises(ValueError, match=r"q.csv:2: row 1, column 'quantity': unknown quantity 'removal rate' \(did you mean removal_rate"):
+        read_all([p])

@@ -308,7 +308,8 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         rec.setdefault("unit", "")
         quantity = rec["quantity"]
         if quantity not in QUANTITIES and quantity not in DEPTH_QUANTITIES:
-            raise bad("quantity", f"unknown quantity {quantity!r}; known: {', '.join(known_quantities())}")
+            near = _near(quantity.replace(" ", "_"), known_quantities()).lstrip("; ")
+            raise bad("quantity", f"unknown quantity {quantity!r}" + (f" ({near})" if near else "") + f"; known: {', '.join(known_quantities())}")
         try:
             rec["value"], rec["unit"] = units.value_and_unit(rec["value"], rec["unit"])
         except ValueError as exc:
