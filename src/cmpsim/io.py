@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import contextlib
+import csv
+import io
+import re
 import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint"]
 
 
 @contextlib.contextmanager
@@ -41,14 +44,18 @@ def atomic_write_text(path: Path, text: str) -> None:
 
 
 def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str:
-    """The UTF-8 text of an input file, or ``error`` saying which file (``what``) and why."""
+    """The UTF-8 text of an input file, or ``error`` saying which file (``what``) and why.
+
+    A leading byte-order mark (spreadsheets write one when they save "CSV UTF-8") is dropped: kept,
+    it would glue itself to the first column name or hide the first comment line.
+    """
     path = Path(path)
     try:
-        return path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8-sig")
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} does not exist") from None
     except UnicodeDecodeError as exc:
-        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc}") from None
+        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc} (save it as UTF-8, e.g. a spreadsheet's 'CSV UTF-8')") from None
     except OSError as exc:
         raise error(f"cannot read {what} {str(path)!r}: {exc}") from None
 
@@ -71,3 +78,88 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
         if s:
             body.append((i, line))
     return meta, body
+
+
+#: Columns whose cells are names (of a quantity, a comparison, a process, a film), read in lower case.
+NAME_COLUMNS = ("quantity", "comparison", "process", "film")
+#: Columns that hold no quantity: a unit in their header (``wafer (#)``) is dropped, not given to their cells.
+TEXT_COLUMNS = NAME_COLUMNS + ("dataset", "wafer", "source", "label", "note", "unit")
+_HEADER_UNIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*[\(\[]\s*(.*?)\s*[\)\]]\s*$")
+
+
+def tidy_csv(text: str, path="") -> str:
+    """A data file's text as a spreadsheet's export of it is meant: the header's column names in lower case
+    and without the empty names of trailing commas; a row's trailing empty fields beyond the header dropped;
+    the cells of :data:`NAME_COLUMNS` in lower case (``Dishing``, ``Copper``); a unit in a column's header
+    (``value (nm/min)``, ``applied_pressure [psi]``) written after each plain number of the column.
+
+    Lines keep their numbers (a changed line is rewritten in place), so messages still name the file's
+    lines; a row with a filled field beyond the header is left for the reader to refuse. A quoted field
+    that runs past the end of its line (a line break inside a cell) raises ValueError naming ``path`` and
+    the line: the readers number rows by lines.
+    """
+    if text.startswith("\ufeff"):  # a byte-order mark in text handed over already decoded (an upload, the API)
+        text = text[1:]
+    lines = text.splitlines()
+    body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.strip().startswith("#")]
+    if not body:
+        return text
+    header = next(csv.reader([lines[body[0]]]))
+    n = len(header)
+    while n > 1 and not header[n - 1].strip():
+        n -= 1
+    names, header_units = [], {}
+    for k, h in enumerate(header[:n]):  # "value (nm/min)", "applied_pressure [psi]": the unit of the column's plain numbers
+        m = _HEADER_UNIT.match(h)
+        names.append((m.group(1) if m else h.strip()).lower())
+        if m and m.group(2) and names[-1] not in TEXT_COLUMNS:
+            header_units[k] = m.group(2)
+    changed = False
+    if names != [h.strip() for h in header]:
+        lines[body[0]] = _csv_line(names)
+        changed = True
+    for i in body:
+        try:
+            row = next(csv.reader([lines[i]], strict=True), [])
+        except csv.Error as exc:
+            if "end of data" not in str(exc):  # another irregular quote ('"a"b'): read as before, leniently
+                row = next(csv.reader([lines[i]]), [])
+            else:
+                raise ValueError(f"{path}:{i + 1}: a quoted field runs past the end of the line (a line break inside a cell); "
+                                 "keep each row on one line") from None
+        if i == body[0]:
+            continue
+        if not any(c.strip() for c in row):  # ",,,,": a spreadsheet's empty row
+            lines[i] = ""
+            changed = True
+        else:
+            keep = row[:n] if len(row) > n and not any(c.strip() for c in row[n:]) else row
+            named = [c.lower() if k < len(names) and names[k] in NAME_COLUMNS
+                     else f"{c.strip()} {header_units[k]}" if k in header_units and _is_number(c) else c for k, c in enumerate(keep)]
+            if named != row:
+                lines[i] = _csv_line(named)
+                changed = True
+    return "\n".join(lines) + "\n" if changed else text
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
+def _csv_line(values) -> str:
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="").writerow(values)
+    return buf.getvalue()
+
+
+def delimiter_hint(header_text: str) -> str:
+    """A hint for a header that is not comma-separated (``quantity;value;unit``): "" when it is."""
+    for sep, name in ((";", "semicolons"), ("\t", "tabs")):
+        if sep in header_text and "," not in header_text:
+            return (f" (the header is separated by {name}: cmpsim reads comma-separated files with a decimal point; "
+                    "export the sheet as CSV with ',' as the separator)")
+    return ""

@@ -53,6 +53,11 @@ def __getattr__(name: str):
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
+#: Norm of a Jacobian column (whitened residuals per unit fit variable, dimensionless) at or below which the data
+#: do not depend on a free input at all (an exact zero in practice: e.g. the edge exclusion for wafer-mean rates).
+ZERO_JACOBIAN = 1e-9
+
+
 def calibrate(
     data,
     free=None,
@@ -172,11 +177,20 @@ def calibrate(
     problem.callback = None
     # after: uncertainty at the optimum, then the model there
     J = central_jacobian(problem, z, n_pts, lower=lower, upper=upper)
+    flat = [n for k, n in enumerate(free) if np.all(np.isfinite(J[:, k])) and np.linalg.norm(J[:, k]) <= ZERO_JACOBIAN]
+    if flat:  # the optimiser moved it for nothing: its "fitted" value would be arbitrary
+        raise CalibrationError(f"--free {', '.join(flat)}: the model's values at these data do not change with "
+                               f"{'it' if len(flat) == 1 else 'them'} (column of the Jacobian zero at the fit): not identifiable from these data, "
+                               "nothing fitted; free inputs the data depend on (without --free the data choose them)")
     m1, res1, st1 = problem.model(z)
     r1 = problem.whiten(m1)
     chi2 = float(np.sum(r1 * r1))
     values = problem.values_of(z)
     unc = uncertainty(J, chi2, dof, problem.absolute_sigma, values, log, scale, bnds)
+    given = sum(p.uncertainty is not None and p.comparison in ("absolute", "range", "shape") for _, p in problem.points)
+    if 0 < given < n_pts:  # say how the two kinds of point were weighted against each other
+        unc.notes.append(f"{n_pts - given} of {n_pts} points have no uncertainty: each is weighted as if its uncertainty were its own "
+                         f"value (its relative error), the other {given} by their uncertainty; give every point one, or none")
     failed = int((~np.isfinite(m1)).sum())
     if failed:
         unc.notes.append(f"{failed} point(s) have no equilibrium at the fitted values (penalised with a residual of {FAILED_POINT_PENALTY:g})")
@@ -244,5 +258,5 @@ def _choose_free(datasets, config: Config):
     choice = choose(J, names, [c.why for c in cands], max(n_pts - n_shape - 1, 0))
     choice.notes = notes
     if not choice.names:
-        raise CalibrationError("the data identify none of the inputs they could choose: " + "; ".join(why for _, why in choice.left))
+        raise CalibrationError("the data identify none of the inputs they could choose: " + "; ".join(f"{n}: {why}" for n, why in choice.left))
     return choice, choice.names

@@ -72,12 +72,20 @@ def _length(rec: dict, column: str, unit: str, where: str) -> float:
     return si
 
 
+def _whole(text: str) -> int:
+    """``text`` as an integer if it is a whole number written with a decimal point ("3.0"); ValueError otherwise."""
+    v = float(text)
+    if not (math.isfinite(v) and v == int(v)):
+        raise ValueError(text)
+    return int(v)
+
+
 def read_lot_rows(path, text: str) -> list[LotRecord]:
     """The lot rows of ``text`` (the CSV content of the file ``path``; its comment lines give the ``dataset``), SI."""
     path = Path(path)
-    from ..io import comments_and_rows
+    from ..io import comments_and_rows, tidy_csv
 
-    meta, body = comments_and_rows(text)
+    meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
         raise LotDataError(f"{path}: no header row and no data rows")
     header = [h.strip() for h in next(csv.reader([body[0][1]]))]
@@ -92,12 +100,23 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
         if q not in LOT_QUANTITIES:
             raise LotDataError(f"{where}: column 'quantity': a lot row (with a wafer) takes {', '.join(LOT_QUANTITIES)}; got {q!r}")
         w = rec.get("wafer", "")
-        try:
-            wafer = int(w)
+        try:  # "3", or "3.0" as a spreadsheet writes a whole number
+            wafer = int(w) if w.strip().lstrip("+-").isdigit() else _whole(w)
         except ValueError:
             raise LotDataError(f"{where}: column 'wafer': {w!r} is not a wafer number (an integer >= 1)") from None
         if wafer < 1:
             raise LotDataError(f"{where}: column 'wafer': {w!r} must be >= 1 (the first wafer of the lot is 1)")
+        from ..inputs.units import uncertainty_text, value_and_unit
+
+        try:  # a value written with its unit ("512 nm"), the unit column empty or the same
+            rec["value"], rec["unit"] = value_and_unit(rec.get("value", ""), rec.get("unit", ""))
+        except ValueError as exc:
+            raise LotDataError(f"{where}: column 'value': {exc}") from None
+        if rec.get("uncertainty"):  # "±4 nm": its unit must be the value's (the unit column's; none for a plain number)
+            try:
+                rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
+            except ValueError as exc:
+                raise LotDataError(f"{where}: column 'uncertainty': {exc}") from None
         unit = rec.get("unit", "")
         if not unit:
             raise LotDataError(f"{where}: column 'unit' is empty; a lot row is a length (nm, angstrom, um)")

@@ -132,6 +132,18 @@ def _quantity(text: str, unit: str, target: str, where: str, column: str) -> flo
         raise MeasurementError(f"{where}: column {column!r}: cannot read {text!r} as a quantity in units of {target or '1'} ({exc})") from None
 
 
+#: Spellings of the degree Celsius and Fahrenheit in a temperature-rise column, lower case (pint reads
+#: ``degC``, ``degF`` as points on a scale: 18 degF would become 265 K, not the rise of 10 K it is).
+_CELSIUS = ("degc", "°c", "c", "celsius", "deg c", "delta_degc", "℃")
+_FAHRENHEIT = ("degf", "°f", "f", "fahrenheit", "deg f", "delta_degf", "℉")
+
+
+def _temperature_difference_unit(unit: str) -> str:
+    """The unit of a temperature difference as pint must read it: Celsius -> K, Fahrenheit -> delta_degF; others unchanged."""
+    u = unit.strip().lower()
+    return "K" if u in _CELSIUS else "delta_degF" if u in _FAHRENHEIT else unit
+
+
 def _length(rec, column, where, required=False, positive=True):
     text = rec.get(column, "")
     if not text:
@@ -161,24 +173,27 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    from ..io import comments_and_rows
+    from ..io import comments_and_rows, delimiter_hint, tidy_csv
 
-    meta, body = comments_and_rows(text)
+    meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
         raise MeasurementError(f"{path}: no header row and no data rows (format: cmpsim/data/README.md, docs/calibrate-die.md)")
     hline, htext = body[0]
     header = [h.strip() for h in next(csv.reader([htext]))]
     where0 = f"{path}:{hline}"
-    for required in ("quantity", "value", "unit"):
+    for required in ("quantity", "value"):  # the unit: a column, or after each value ("50 nm")
         if required not in header:
-            raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})")
+            raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(htext))
     if len(set(header)) != len(header):
         raise MeasurementError(f"{where0}: a column name is repeated in the header")
     for col in header:
         if col in _COMMON or col in _STRUCTURE_COLUMNS or col in DIE_PARAMETERS or col in _THERMAL_EXTRA or col in PARAMETERS:
             continue
+        from ..validation.data import _near
+
         raise MeasurementError(f"{where0}: unknown column {col!r}: use the columns of docs/calibrate-die.md, die inputs "
-                               f"({', '.join(DIE_PARAMETERS)}) or cmpsim parameter names")
+                               f"({', '.join(DIE_PARAMETERS)}) or cmpsim parameter names"
+                               + _near(col, [*_COMMON, *_STRUCTURE_COLUMNS, *DIE_PARAMETERS, *_THERMAL_EXTRA, *PARAMETERS]))
     default_name = meta.get("dataset") or path.stem
     out = []
     for (lineno, _), row in zip(body[1:], csv.reader([t for _, t in body[1:]])):
@@ -186,21 +201,36 @@ def read_measurements(path, text: str | None = None) -> list:
         if len(row) != len(header):
             raise MeasurementError(f"{where}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
         rec = {h: c.strip() for h, c in zip(header, row)}
+        rec.setdefault("unit", "")
         q = rec["quantity"]
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
                                    f"{', '.join(list(STRUCTURE_QUANTITIES) + list(THERMAL_QUANTITIES))}")
+        from ..inputs.units import uncertainty_text, value_and_unit
+
+        try:  # a value written with its unit ("50 nm"), the unit column empty or the same
+            rec["value"], rec["unit"] = value_and_unit(rec["value"], rec["unit"])
+        except ValueError as exc:
+            raise MeasurementError(f"{where}: column 'value': {exc}") from None
+        if rec.get("uncertainty"):  # "±4 nm": its unit must be the value's (the unit column's; none for a plain number)
+            try:
+                rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
+            except ValueError as exc:
+                raise MeasurementError(f"{where}: column 'uncertainty': {exc}") from None
+        if "unit" not in header and not rec["unit"] and rec["value"] and q != "friction_coefficient":
+            raise MeasurementError(f"{where0}: required column 'unit' is missing (header: {', '.join(header)}); give it, or the unit after "
+                                   f"every value ('50 nm'): line {lineno} has none")
         if not rec["value"]:
             raise MeasurementError(f"{where}: column 'value' is empty")
         if not rec["unit"] and q != "friction_coefficient":
-            raise MeasurementError(f"{where}: column 'unit' is empty")
+            raise MeasurementError(f"{where}: column 'unit' is empty (give the unit in the unit column or after the value: '50 nm')")
         target = (STRUCTURE_QUANTITIES.get(q) or THERMAL_QUANTITIES[q])[0]
         try:
             float(rec["value"])
         except ValueError:
             raise MeasurementError(f"{where}: column 'value': {rec['value']!r} is not a number") from None
-        if q == "pad_temperature_rise":  # a difference of temperatures: degC and K are the same size
-            unit = {"degc": "K", "°c": "K", "c": "K", "delta_degc": "K"}.get(rec["unit"].lower(), rec["unit"])
+        if q == "pad_temperature_rise":  # a difference of temperatures: a degree Celsius is a kelvin, a degree Fahrenheit 5/9 K
+            unit = _temperature_difference_unit(rec["unit"])
         else:
             unit = rec["unit"] or "1"
         value = _quantity(rec["value"], unit, target, where, "value")
@@ -280,6 +310,9 @@ def read_measurements(path, text: str | None = None) -> list:
                     point_config(Config.default(), {c: v})
                 except ValueError as exc:
                     raise MeasurementError(f"{where}: column {c!r}: {exc}") from None
+            if q == "pad_temperature_rise" and not value > 0:
+                raise MeasurementError(f"{where}: column 'value': a pad temperature rise must be > 0 K (friction only heats the pad; "
+                                       f"the heat balance cannot fit a rise of {rec['value']} {rec['unit']})")
             if q == "friction_coefficient" and not 0 < value < 10:
                 raise MeasurementError(f"{where}: column 'value': a friction coefficient must lie in (0, 10); got {rec['value']}")
             out.append(ThermalRecord(q, value, unc, t, conditions, flow, **common))

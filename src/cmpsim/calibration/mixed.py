@@ -107,12 +107,20 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
     groups = sorted({reader[f] for f in families})
     if not groups:
         return {"film": (text, rows)}  # no data row: the data-set reader says so ("no data rows")
-    if len(groups) == 1:
+    # a column of another family that no row fills (a template's structure columns, a wafer column without lots) is
+    # dropped; a name no family knows is still refused by the reader
+    empty = {k for k in range(len(header)) if not any(parsed[i][k].strip() for i in parsed)}
+    unknown_empty = [k for k in sorted(empty) if not all(_accepts(f, header[k]) for f in families)
+                     and any(_accepts(f, header[k]) for f in ("film", "structure", "pad", "lot"))]
+    if len(groups) == 1 and not unknown_empty:
         return {groups[0]: (text, rows)}  # one reader: it sees the file as it is and names a column it does not know
     out = {}
     for g in groups:
         fams = [f for f in families if reader[f] == g]
-        keep = [k for k, c in enumerate(header) if all(_accepts(f, c) for f in fams)]
+        if len(groups) == 1:  # the reader still names a filled column it does not know
+            keep = [k for k in range(len(header)) if k not in unknown_empty]
+        else:
+            keep = [k for k, c in enumerate(header) if all(_accepts(f, c) for f in fams)]
         new = []
         for i, ln in enumerate(lines, start=1):
             if i == body[0][0]:
@@ -142,7 +150,7 @@ def _csv_line(values) -> str:
 
 def read_all(paths) -> Measurements:
     """Read measurement files of every family (film, structures, pad, lots); ValueError naming file, line, row and column."""
-    from ..io import read_text
+    from ..io import read_text, tidy_csv
     from ..validation.data import load_datasets
     from .lotdata import read_lot_rows
     from .measurements import StructureRecord, read_measurements
@@ -150,7 +158,7 @@ def read_all(paths) -> Measurements:
     out = Measurements()
     for p in [paths] if isinstance(paths, (str, Path)) else list(paths):
         path = Path(p)
-        text = read_text(path, "data file", MixedDataError)
+        text = tidy_csv(read_text(path, "data file", MixedDataError), path)
         out.paths.append(str(path))
         for group, (sub, rows) in _split(path, text).items():
             try:
@@ -166,5 +174,7 @@ def read_all(paths) -> Measurements:
     names = [d.name for d in out.datasets]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
-        raise MixedDataError(f"data set names must be unique; repeated: {', '.join(dup)}")
+        where = {n: sorted({str(d.path) for d in out.datasets if d.name == n}) for n in dup}
+        raise MixedDataError("data set names must be unique; repeated: " + "; ".join(f"{n!r} in {' and '.join(where[n])}" for n in dup)
+                             + " (give each file its own '# dataset: NAME' line, or a dataset column)")
     return out

@@ -92,7 +92,14 @@ def free_names(free) -> list[str]:
 
 
 def check_data(datasets: list[Dataset], free: list[str], include_model_predictions: bool) -> None:
-    """Refuse another model's predictions (unless asked) and free names that the data set per point."""
+    """Refuse another model's predictions (unless asked), free names that the data set per point, and a
+    point of value 0 without an uncertainty (its relative error, the weight of a point without one, has no scale)."""
+    for d in datasets:
+        for p in d.points:
+            if p.value == 0 and p.uncertainty is None and p.comparison in ("absolute", "range"):
+                where = f"{d.path}:{p.line}: row {p.row}" if d.path is not None else f"data set {d.name!r}, line {p.line}"
+                raise CalibrationError(f"{where}, column 'uncertainty': a measured {p.quantity} of 0 needs its uncertainty (> 0, in {p.unit}): "
+                                       "without one a point is weighted by its relative error, which a value of 0 does not have")
     if not include_model_predictions:
         bad = [d.name for d in datasets if d.kind == "model_prediction"]
         if bad:

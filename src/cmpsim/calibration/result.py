@@ -94,7 +94,7 @@ class CalibrationResult:
                     f"{format_display(n, self.initial[n])}",
                     f"{format_display(n, self.values[n])}",
                     f"{_disp(n, self.stderr[n])}",
-                    f"[{format_display(n, lo) if np.isfinite(lo) else '-'}, {format_display(n, hi) if np.isfinite(hi) else '-'}]",
+                    f"[{format_display(n, lo) if np.isfinite(lo) else '-'}, {format_display(n, hi) if np.isfinite(hi) else 'inf' if hi > 0 else '-'}]",
                     f"[{format_display(n, self.bounds[n][0])}, {format_display(n, self.bounds[n][1])}]",
                     unit,
                     "log" if self.log_scale[n] else "linear",

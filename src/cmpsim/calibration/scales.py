@@ -63,7 +63,7 @@ class ScaleCalibration:
             for n in self.film.free:
                 lo, hi = self.film.ci95[n]
                 rows.append(["film", n, format_display(n, self.film.values[n]),
-                             f"[{format_display(n, lo) if np.isfinite(lo) else '-'}, {format_display(n, hi) if np.isfinite(hi) else '-'}]",
+                             f"[{format_display(n, lo) if np.isfinite(lo) else '-'}, {format_display(n, hi) if np.isfinite(hi) else 'inf' if hi > 0 else '-'}]",
                              PARAMETERS[n].display or "-"])
         if self.die is not None:
             for n in self.die.free:
@@ -119,8 +119,17 @@ def split_free(names, measurements) -> tuple[list[str], list[str], list[str], li
     from .padlife import GLAZING_CONSTANTS
     from .thermal import THERMAL_CONSTANTS
 
+    from ..inputs.config import PARAMETERS
+
     film, die, pad, life = [], [], [], []
+    known = [*GLAZING_CONSTANTS, *DIE_CONSTANTS, *THERMAL_CONSTANTS, *PARAMETERS]
     for n in names or []:
+        if n.replace("-", "_") not in known:  # a typo: say so, not which rows its (unknown) scale would need
+            import difflib
+
+            near = difflib.get_close_matches(n, known, n=3)
+            raise ValueError(f"--free {n}: unknown parameter {n!r}" + (f"; did you mean {', '.join(near)}?" if near else "")
+                             + " (inputs: `cmpsim params`; die constants: " + ", ".join(DIE_CONSTANTS) + "; pad: " + ", ".join(THERMAL_CONSTANTS) + ")")
         if n in GLAZING_CONSTANTS:
             if not measurements.lots:
                 raise ValueError(f"--free {n}: a pad life constant needs a lot's rows (a wafer column, quantity thickness or removal) and --recipe")

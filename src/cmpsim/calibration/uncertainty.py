@@ -48,6 +48,12 @@ def central_jacobian(residuals, z: np.ndarray, n_points: int, h: float = 1e-3, l
     return J
 
 
+#: Reduced chi-square below which a fit without absolute uncertainties is exact (whitened residuals of
+#: relative size ~1e-5 and less: no transcribed measurement is that precise), so its scatter cannot scale
+#: the covariance (it would shrink the intervals to nothing).
+EXACT_FIT_REDUCED_CHI2 = 1e-10
+
+
 def _covariance(J: np.ndarray, chi2: float, dof: int, absolute_sigma: bool, notes: list[str]) -> np.ndarray:
     n = J.shape[1]
     jtj = J.T @ J
@@ -59,9 +65,14 @@ def _covariance(J: np.ndarray, chi2: float, dof: int, absolute_sigma: bool, note
         cov = np.full((n, n), np.inf)
         notes.append("J^T J is singular: the data do not determine the free parameters (not identifiable); standard errors are infinite")
     if not absolute_sigma:
-        cov = cov * (chi2 / dof if dof > 0 else float("nan"))
+        exact = dof > 0 and chi2 / dof < EXACT_FIT_REDUCED_CHI2
+        cov = cov * (chi2 / dof if dof > 0 and not exact else float("nan"))
         if dof == 0:
             notes.append("no degrees of freedom left: without absolute uncertainties the standard errors are undefined")
+        elif exact:
+            notes.append(f"the points are fitted exactly (reduced chi-square {chi2 / dof:.3g}: e.g. repeated or proportional points, which give "
+                         "no more settings than free inputs): without absolute uncertainties there is no scatter to estimate the standard "
+                         "errors from, so they are undefined; give each point its uncertainty")
     return cov
 
 
@@ -83,7 +94,11 @@ def uncertainty(
     free = list(values)
     notes: list[str] = []
     cov = _covariance(J, chi2, dof, absolute_sigma, notes)
-    se_z = np.sqrt(np.clip(np.diag(cov), 0, None)) if np.all(np.isfinite(np.diag(cov))) else np.full(len(free), np.inf)
+    diag = np.diag(cov)
+    if np.any(np.isnan(diag)):  # undefined (no scatter to scale by): no interval, not an infinite one
+        se_z = np.full(len(free), np.nan)
+    else:
+        se_z = np.sqrt(np.clip(diag, 0, None)) if np.all(np.isfinite(diag)) else np.full(len(free), np.inf)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se_z, se_z) if np.all(np.isfinite(se_z)) and np.all(se_z > 0) else np.full_like(cov, np.nan)
     stderr, ci95 = {}, {}
@@ -92,7 +107,7 @@ def uncertainty(
         if log[n]:
             stderr[n] = abs(v) * se_z[k]
             w = 1.96 * se_z[k]
-            ci95[n] = (v * math.exp(-w), v * math.exp(w)) if np.isfinite(w) and w < 700 else (0.0, float("inf"))
+            ci95[n] = (v * math.exp(-w), v * math.exp(w)) if np.isfinite(w) and w < 700 else (math.nan, math.nan) if np.isnan(w) else (0.0, float("inf"))
         else:
             stderr[n] = se_z[k] * scale[n]
             ci95[n] = (v - 1.96 * stderr[n], v + 1.96 * stderr[n])

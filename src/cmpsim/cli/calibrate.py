@@ -72,6 +72,11 @@ def calibrate_command(data, free, bounds, config_path, preset, assignments, grid
 
     names = _split_names(free)
     bnds = {}
+    from pathlib import Path
+
+    inputs = [Path(p) for p in (*data, *([config_path] if config_path else []), *([recipe_path] if recipe_path else []))]
+    if any(p.exists() and Path(out_path).exists() and p.resolve() == Path(out_path).resolve() for p in inputs):
+        _fail(f"--out {out_path} is one of the input files; it would be overwritten by the process file: give another --out")
     try:
         for item in bounds:
             if "=" not in item or ":" not in item.split("=", 1)[1]:

@@ -482,7 +482,15 @@ class Config:
             data = tomllib.loads(read_text(path, "config file"))
         except tomllib.TOMLDecodeError as exc:
             raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
-        return cls.from_mapping(data, base=base)
+        if isinstance(data.get("step"), list) or isinstance(data.get("film"), list):
+            raise ValueError(f"config file {str(path)!r} is a recipe ([[film]] and [[step]] tables: `cmpsim polish RECIPE`, "
+                             "`--recipe RECIPE`), not a configuration of inputs")
+        if isinstance(data.get("axes"), dict):
+            raise ValueError(f"config file {str(path)!r} is a sweep specification ([axes]: `cmpsim sweep FILE`), not a configuration of inputs")
+        try:
+            return cls.from_mapping(data, base=base)
+        except ValueError as exc:  # an unknown key or a bad value: say which file holds it
+            raise ValueError(f"config file {str(path)!r}: {exc}") from None
 
     @property
     def solid_volume_fraction(self) -> float:

@@ -20,13 +20,97 @@ not import pint.
 
 from __future__ import annotations
 
+import re
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
+__all__ = ["normalise_unit", "value_and_unit", "uncertainty_text", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
 ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "a/s": "angstrom/second", "å/s": "angstrom/second", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
+
+
+#: Unit words of published CMP data, by their lower-case spelling, in pint's spelling. Read only when
+#: pint cannot read a unit as written or reads it with the wrong dimension (:func:`normalise_unit`):
+#: "A" and "Angstrom" (pint: ampere, unknown) are angstroms, "PSI", "RPM", "NM/MIN" upper-case,
+#: "sec" and "hr" the second and the hour, "rev" and "r" a revolution.
+UNIT_WORDS = {
+    "a": "angstrom", "å": "angstrom", "ang": "angstrom", "angstrom": "angstrom", "angstroms": "angstrom",
+    "ka": "kiloangstrom", "kå": "kiloangstrom",
+    "nm": "nm", "um": "um", "µm": "um", "μm": "um", "mm": "mm", "cm": "cm", "m": "m", "micron": "micron", "microns": "micron",
+    "in": "inch", "inch": "inch", "inches": "inch", "mil": "thou", "mils": "thou",
+    "psi": "psi", "pa": "Pa", "kpa": "kPa", "mpa": "MPa", "hpa": "hPa", "bar": "bar", "mbar": "mbar",
+    "rpm": "rpm", "rev": "revolution", "r": "revolution",
+    "s": "second", "sec": "second", "secs": "second", "min": "minute", "mins": "minute", "h": "hour", "hr": "hour", "hrs": "hour",
+    "ml": "mL", "l": "L", "k": "K",
+}
+#: Mass units that a pressure in kg/cm^2 or g/cm^2 means as a force (the weight of that mass).
+_FORCE_WORDS = {"g": "gram_force", "gf": "gram_force", "kg": "kilogram_force", "kgf": "kilogram_force", "lb": "pound_force", "lbs": "pound_force"}
+_WORD = re.compile(r"([A-Za-zµμÅå]+)(\^?-?[0-9]+)?")
+_NUMBER = re.compile(r"^\s*([-+]?(?:[0-9]+\.?[0-9]*|\.[0-9]+)(?:[eE][-+]?[0-9]+)?)\s*(.*)$", re.S)
+
+
+def normalise_unit(unit: str, pressure: bool = False) -> str:
+    """A unit as written in a published table in pint's spelling, word by word (:data:`UNIT_WORDS`).
+
+    ``"Angstrom/min"`` -> ``"angstrom/minute"``, ``"NM/MIN"`` -> ``"nm/minute"``, ``"A"`` -> ``"angstrom"``,
+    ``"cm2"`` -> ``"cm^2"``, ``"nm min-1"`` -> ``"nm minute^-1"``; with ``pressure``, ``"g/cm2"`` ->
+    ``"gram_force/cm^2"``. Words it does not know are kept. Used only after pint failed on the text as
+    written, so a unit pint reads with the right dimension is never reinterpreted.
+    """
+
+    def word(m: re.Match) -> str:
+        w = m.group(1)
+        out = (_FORCE_WORDS.get(w.lower()) if pressure else None) or UNIT_WORDS.get(w.lower(), w)
+        power = (m.group(2) or "").lstrip("^")
+        return out + (f"^{power}" if power else "")
+
+    return _WORD.sub(word, unit)
+
+
+def value_and_unit(value: str, unit: str) -> tuple[str, str]:
+    """A data file's value cell and unit cell as (number text, unit text): ``"150 nm/min"`` with an empty unit
+    cell (or the same unit) gives ``("150", "nm/min")``; a number is returned unchanged.
+
+    Raises ``ValueError`` when the cell's unit and the unit column disagree (the value is not guessed).
+    """
+    m = _NUMBER.match(value)
+    if not m or not m.group(2).strip():
+        return value, unit
+    inside = m.group(2).strip()
+    if not (inside[0].isalpha() or inside[0] in "%°µμÅ"):  # "1,500" or "1.5.2": not a number and a unit; the reader says it is no number
+        if inside[0] == "," and inside[1:].isdigit():
+            raise ValueError(f"{value!r} is not a number (a thousands separator or a decimal comma? write the number with a decimal "
+                             "point and no separator)")
+        return value, unit
+    if unit.strip() and inside.replace(" ", "").lower() != unit.replace(" ", "").lower():
+        raise ValueError(f"{value!r} carries the unit {inside!r} but the unit column says {unit!r}; give the unit in one place")
+    return m.group(1), inside
+
+
+def uncertainty_text(text: str) -> str:
+    """An uncertainty cell without the plus-minus sign papers print before it (``"±10"``, ``"+/- 10"``, ``"+-10"``)."""
+    return re.sub(r"^\s*(±|\+/-|\+-)\s*", "", text)
+
+
+def _is_pressure(target: str) -> bool:
+    try:
+        return registry().Quantity(1.0, target or "dimensionless").dimensionality == registry().Quantity(1.0, "Pa").dimensionality
+    except Exception:  # noqa: BLE001 - a target pint does not know is not a pressure
+        return False
+
+
+def _normalised_quantity(text: str, target: str):
+    """``text`` (a number and a unit) as a pint Quantity with its unit normalised, or None if it still cannot be read."""
+    m = _NUMBER.match(text)
+    if not m or not m.group(2).strip():
+        return None
+    try:
+        q = registry().Quantity(float(m.group(1)), normalise_unit(m.group(2).strip(), _is_pressure(target)))
+        q.to(target or "dimensionless")
+    except Exception:  # noqa: BLE001 - still not a quantity of the target's dimension
+        return None
+    return q
 
 
 @lru_cache(maxsize=1)
@@ -57,7 +141,10 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
     try:
         q = registry().Quantity(value) if isinstance(value, str) else value
     except Exception as exc:  # pint raises several error types for bad strings
-        raise ValueError(f"{name}: cannot read {value!r} as a quantity ({exc}); expected units of {unit or 'none (dimensionless)'}") from None
+        fixed = _normalised_quantity(value, unit) if isinstance(value, str) else None
+        if fixed is None:
+            raise ValueError(f"{name}: cannot read {value!r} as a quantity ({exc}); expected units of {unit or 'none (dimensionless)'}") from None
+        q = fixed
     if not hasattr(q, "to"):
         try:
             return float(q)
@@ -65,16 +152,52 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
             raise ValueError(f"{name} must be a number with units of {unit or 'none'}; got {value!r}") from None
     target = unit or "dimensionless"
     try:
-        return float(q.to(target).magnitude)
+        out = float(q.to(target).magnitude)
     except Exception:
+        fixed = _normalised_quantity(value, unit) if isinstance(value, str) else None
+        if fixed is not None:
+            _check_angle(fixed, target, name, value)
+            return float(fixed.to(target).magnitude)
         raise ValueError(
             f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r} (e.g. {example or target})"
         ) from None
+    _check_angle(q, target, name, value)
+    return out
+
+
+#: Words of pint's angle units: a rotation speed must name one (``rpm``, ``rad/s``, ``deg/s``, ``rev/min``).
+_ANGLE_WORDS = ("radian", "revolution", "degree", "turn", "cycle", "arcminute", "arcsecond", "gradian")
+
+
+def _check_angle(q, target: str, name: str, value) -> None:
+    """Refuse a rotation speed given as a bare frequency (``60 1/min``, ``1 Hz``): pint's radian is
+    dimensionless, so it would be read as radians per time, 2 pi times slower than the revolutions it usually means."""
+    if not (target.startswith("rad/") and hasattr(q, "units")):  # an angular velocity only (an angle may be a plain number)
+        return
+    if not any(w in str(q.units) for w in _ANGLE_WORDS):
+        raise ValueError(f"{name}: {value!r} is a frequency without an angle (revolutions or radians per time?); "
+                         "write rpm (revolutions per minute), rev/s or rad/s")
 
 
 def convert(value: float, unit: str, to: str) -> float:
-    """``value`` given in ``unit`` expressed in ``to`` (both pint syntax or data-file spellings)."""
-    return float(registry().Quantity(float(value), unit_text(unit)).to(unit_text(to)).magnitude)
+    """``value`` given in ``unit`` expressed in ``to`` (both pint syntax or data-file spellings).
+
+    A ``unit`` pint cannot read, or reads with a dimension other than ``to``'s, is read once more
+    word by word (:func:`normalise_unit`: ``"Angstrom/min"``, ``"NM/MIN"``, ``"A"`` for a length);
+    if that fails too, pint's error on the unit as written is raised.
+    """
+    source, target = unit_text(unit), unit_text(to)
+    try:
+        return float(registry().Quantity(float(value), source).to(target).magnitude)
+    except Exception:
+        # either side may be a data file's spelling: the unit of a value, or the unit to report it in
+        for tgt in (target, normalise_unit(target, _is_pressure(source))):
+            for src in (source, normalise_unit(source, _is_pressure(tgt))):
+                try:
+                    return float(registry().Quantity(float(value), src).to(tgt).magnitude)
+                except Exception:  # noqa: BLE001 - the next spelling; pint's error on the units as written if none reads
+                    continue
+        raise
 
 
 def _entry(param):

@@ -262,6 +262,11 @@ def evaluate_dataset(ds: Dataset, values_si: Sequence[float], results: Sequence[
     return rows, summary
 
 
+def _where(p) -> str:
+    """A data point's place in its file for a message: ``file:line: row N`` (its data set's name if it has no file)."""
+    return f"{p.path}:{p.line}: row {p.row}" if p.path else f"{p.dataset}, row {p.row} (line {p.line})"
+
+
 def solve_points(points, config: Config, relative: bool = False, warm: dict | None = None, advance: Callable[[bool], None] | None = None):
     """Model value, result and status of each measured point; returns (values, results, statuses, equilibria).
 
@@ -274,6 +279,12 @@ def solve_points(points, config: Config, relative: bool = False, warm: dict | No
     cache = PointCache(relative=relative)
     values, results, statuses = [], [], []
     previous = None
+    for p in points:  # a position beyond its wafer is refused before any point is solved
+        wafer = 0.5 * point_config(config, p.conditions).wafer_diameter
+        if p.where.get("radius", 0.0) > wafer * (1 + 1e-9):
+            raise ValueError(f"{_where(p)}, column 'radius': radius {p.where['radius'] * 1e3:g} mm lies beyond the wafer (radius {wafer * 1e3:g} mm: "
+                             "wafer_diameter {0:g} mm{1}); give the wafer_diameter of the measurement".format(
+                                 2e3 * wafer, "" if "wafer_diameter" in p.conditions else ", the configuration's"))
     for p in points:
         key = tuple(sorted(p.conditions.items()))
         out = cache.solve(point_config(config, p.conditions), start=warm.get(key) if warm is not None else previous)
@@ -289,7 +300,7 @@ def solve_points(points, config: Config, relative: bool = False, warm: dict | No
             try:
                 values.append(model_value(res, p.quantity, p.where))
             except ValueError as exc:
-                raise ValueError(f"{p.dataset}, row {p.row} (line {p.line}), column 'radius': {exc}") from None
+                raise ValueError(f"{_where(p)}, column 'radius': {exc}") from None
             results.append(res)
             floored = res.scalars["flow_factor_floored_fraction"]
             statuses.append("ok" if floored == 0 else f"ok (flow factors regularised on {100 * floored:.0f} % of faces)")

@@ -123,6 +123,9 @@ DEPTH_QUANTITIES: dict[str, tuple[str, str, str, tuple[str, ...]]] = {
     "removal": ("m", "nm", "depth of film removed in the polish time (blanket, at the solved rate)", ("time",)),
     "thickness": ("m", "nm", "film thickness left after the polish time (initial_thickness - rate x time, >= 0)", ("time", "initial_thickness")),
 }
+#: Quantities that may be negative (an angle, a stress by its sign); every other measured quantity is >= 0
+#: (a rate, a depth, a thickness, a fraction, a ratio, a friction coefficient) and a negative value is refused.
+SIGNED_QUANTITIES = ("attack_angle", "shear_stress_mean", "normal_stress_mean")
 #: Quantities that may be given at a ``radius`` (or ``x``, ``y``): the removal rate and the depths.
 PROFILE_QUANTITIES = ("removal_rate", "removal_rate_mean", "removal", "thickness")
 
@@ -176,6 +179,8 @@ class DataPoint:
     where: dict[str, float] = field(default_factory=dict)
     #: the data row (1 = the first row after the header)
     row: int = 0
+    #: the file the point was read from ("" when built in code)
+    path: str = ""
 
     @property
     def value_si(self) -> float:
@@ -200,7 +205,7 @@ class DataPoint:
 
 def _short(value: float, unit: str) -> str:
     if unit == "m":
-        return f"{value * 1e3:g} mm" if value >= 1e-3 else f"{value * 1e9:g} nm"
+        return f"{value * 1e3:g} mm" if value >= 1e-3 or value == 0 else f"{value * 1e9:g} nm"  # a radius of 0 is the centre, in mm
     return f"{value:g} s"
 
 
@@ -256,20 +261,20 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import comments_and_rows, read_text
+    from ..io import comments_and_rows, delimiter_hint, read_text, tidy_csv
 
     path = Path(path)
     if text is None:
         text = read_text(path, "data file", DataError)
-    meta, body_lines = comments_and_rows(text)
+    meta, body_lines = comments_and_rows(tidy_csv(text, path))
     if not body_lines:
         raise DataError(f"{path}: no header row and no data rows (see cmpsim/data/README.md for the format)")
     header_line, header_text = body_lines[0]
     header = [h.strip() for h in next(csv.reader([header_text]))]
     where0 = f"{path}:{header_line}"
-    for required in ("quantity", "value", "unit"):
+    for required in ("quantity", "value"):  # the unit: a column, or after each value ("150 nm/min")
         if required not in header:
-            raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})")
+            raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(header_text))
     if len(set(header)) != len(header):
         raise DataError(f"{where0}: duplicate column names in the header")
     for col in header:
@@ -279,6 +284,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             raise DataError(
                 f"{where0}: header, column {col!r}: unknown column {col!r}: condition columns must be cmpsim parameter names "
                 f"(see `cmpsim params`), {', '.join(EXTRA_CONDITIONS)}, or the position and time columns {', '.join(POINT_COLUMNS)}"
+                + _near(col, [*META_COLUMNS, *EXTRA_CONDITIONS, *POINT_COLUMNS, *PARAMETERS])
             )
         if PARAMETERS[col].section == "numerics" and col != "model":
             raise DataError(f"{where0}: header, column {col!r}: column {col!r} is a numerical setting, not an operating condition")
@@ -287,7 +293,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     if "radius" in header and "x" in header:
         raise DataError(f"{where0}: header, column 'radius': give radius or x and y, not both")
     default_name = meta.get("dataset") or path.stem
-    default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,")
+    default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,").lower()
     datasets: dict[str, Dataset] = {}
     rows = csv.reader([t for _, t in body_lines[1:]])
     for row_no, ((lineno, _), row) in enumerate(zip(body_lines[1:], rows), start=1):
@@ -299,9 +305,24 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         if len(row) != len(header):
             raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}")
         rec = {h: c.strip() for h, c in zip(header, row)}
+        rec.setdefault("unit", "")
         quantity = rec["quantity"]
         if quantity not in QUANTITIES and quantity not in DEPTH_QUANTITIES:
-            raise bad("quantity", f"unknown quantity {quantity!r}; known: {', '.join(known_quantities())}")
+            near = _near(quantity.replace(" ", "_"), known_quantities()).lstrip("; ")
+            raise bad("quantity", f"unknown quantity {quantity!r}" + (f" ({near})" if near else "") + f"; known: {', '.join(known_quantities())}")
+        try:
+            rec["value"], rec["unit"] = units.value_and_unit(rec["value"], rec["unit"])
+        except ValueError as exc:
+            raise bad("value", str(exc)) from None
+        if "unit" not in header and not rec["unit"] and rec["value"]:
+            raise DataError(f"{where0}: required column 'unit' is missing (header: {', '.join(header)}); give it, or the unit after every "
+                            f"value ('150 nm/min'): line {lineno}, row {row_no} has none")
+        if not rec["value"]:
+            raise bad("value", "the value is empty (a measured number, in the unit column's unit)")
+        if not rec["unit"] and quantity_unit(quantity) != "dimensionless":
+            raise bad("unit", f"the unit is empty; a {quantity} needs a unit convertible to {quantity_unit(quantity)} "
+                              f"(e.g. {DEPTH_QUANTITIES[quantity][1] if quantity in DEPTH_QUANTITIES else QUANTITIES[quantity][1]}), "
+                              "in the unit column or after the value")
         try:
             value = _parse_float(rec["value"], "value", where)
         except DataError as exc:
@@ -310,10 +331,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         unc_text = rec.get("uncertainty", "")
         uncertainty = None
         if unc_text:
-            try:
-                uncertainty = _parse_float(unc_text, "uncertainty", where)
-            except DataError as exc:
-                raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
+            uncertainty = _uncertainty(unc_text, unit, quantity, where, bad)
             if uncertainty <= 0:
                 raise bad("uncertainty", f"uncertainty must be > 0 (or empty); got {unc_text!r}")
         comparison = rec.get("comparison") or default_comparison
@@ -323,11 +341,16 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             raise bad("uncertainty", "comparison 'range' needs the half-width of the range in the uncertainty column")
         if comparison in ("order", "shape") and value <= 0:
             raise bad("value", f"comparison {comparison!r} needs a positive value; got {value:g}")
+        if value < 0 and quantity not in SIGNED_QUANTITIES:
+            raise bad("value", f"a {quantity} is >= 0; got {rec['value']} {unit}")
         try:
             to_si(value, unit, quantity)
         except ValueError as exc:
             raise bad("unit", str(exc)) from None
         place = _point_place(rec, quantity, bad)
+        if quantity == "thickness" and to_si(value, unit, quantity) > place["initial_thickness"] * (1 + 1e-12):
+            raise bad("value", f"the thickness left ({rec['value']} {unit}) exceeds the initial_thickness ({rec['initial_thickness']}): "
+                               "a polish only removes film")
         conditions = {}
         for col in header:
             if col in META_COLUMNS or col in POINT_COLUMNS or not rec[col]:
@@ -344,12 +367,13 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         except ValueError as exc:
             raise bad(", ".join(conditions), str(exc)) from None
         name = rec.get("dataset") or default_name
-        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no)
+        p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no, str(path))
         ds = datasets.setdefault(name, Dataset(name, [], dict(meta), path))
         ds.points.append(p)
     if not datasets:
         raise DataError(f"{path}: the file has a header but no data rows")
     for ds in datasets.values():
+        _one_unit(ds)
         modes = {p.comparison for p in ds.points}
         if len(modes) > 1:
             raise DataError(f"{path}: data set {ds.name!r} mixes comparison modes {sorted(modes)}; use one per data set")
@@ -359,6 +383,47 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             if len(ds.points) < 2:
                 raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
     return list(datasets.values())
+
+
+def _near(name: str, names) -> str:
+    """"; did you mean X?" for the names close to a misspelt ``name`` ("" when none is close)."""
+    import difflib
+
+    near = difflib.get_close_matches(name, list(names), n=3)
+    return f"; did you mean {', '.join(near)}?" if near else ""
+
+
+def _one_unit(ds: Dataset) -> None:
+    """Points of one quantity written in several units (``nm/min`` and ``A/min``) re-expressed, in place, in the
+    first point's unit: a data set's RMS error, its shape scale and the mean it is compared with need one unit."""
+    if len({p.quantity for p in ds.points}) != 1 or len({p.unit for p in ds.points}) == 1:
+        return
+    unit, q = ds.points[0].unit, ds.points[0].quantity
+    for p in ds.points[1:]:
+        if p.unit != unit:
+            p.value = from_si(to_si(p.value, p.unit, q), unit, q)
+            if p.uncertainty is not None:
+                p.uncertainty = from_si(p.uncertainty_si + to_si(0.0, unit, q), unit, q)
+            p.unit = unit
+
+
+def _uncertainty(text: str, unit: str, quantity: str, where: str, bad) -> float:
+    """The uncertainty cell in the row's ``unit``: a number, or a number with a unit of the quantity (``"10 nm/min"``)."""
+    number, own = units.value_and_unit(units.uncertainty_text(text), "")
+    try:
+        u = _parse_float(number, "uncertainty", where)
+    except DataError as exc:
+        raise bad("uncertainty", str(exc).split(": ", 1)[1]) from None
+    if own and own.replace(" ", "").lower() != unit.replace(" ", "").lower():
+        if own.strip() in ("%", "percent"):  # 5 % of a fraction given in 1, or 5 % of the value? not guessed
+            raise bad("uncertainty", f"{text!r}: a relative uncertainty in % is not read; give it in {unit or 'the unit of the value'}")
+        try:
+            u = to_si(u, own, quantity) - to_si(0.0, own, quantity)
+            u = from_si(u, unit, quantity) - from_si(0.0, unit, quantity)
+        except Exception:  # noqa: BLE001 - a relative (5 %) or foreign unit
+            raise bad("uncertainty", f"{text!r} is not an uncertainty in units of {quantity} (give it in {unit}, e.g. '10'; "
+                                     "a relative uncertainty in % is not read)") from None
+    return u
 
 
 def _point_place(rec: dict, quantity: str, bad) -> dict[str, float]:
