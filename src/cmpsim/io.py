@@ -135,14 +135,15 @@ def tidy_csv(text: str, path="") -> str:
         else:
             keep = row[:n] if len(row) > n and not any(c.strip() for c in row[n:]) else row
             named = [c.lower() if k < len(names) and names[k] in NAME_COLUMNS
-                     else f"{c.strip()} {header_units[k]}" if k in header_units and _is_number(c) else c for k, c in enumerate(keep)]
+                     else f"{c.strip()} {header_units[k]}" if k in header_units and is_number(c) else c for k, c in enumerate(keep)]
             if named != row:
                 lines[i] = _csv_line(named)
                 changed = True
     return "\n".join(lines) + "\n" if changed else text
 
 
-def _is_number(text: str) -> bool:
+def is_number(text: str) -> bool:
+    """Whether ``text`` reads as a float."""
     try:
         float(text)
     except ValueError:

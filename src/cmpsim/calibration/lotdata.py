@@ -106,17 +106,12 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
             raise LotDataError(f"{where}: column 'wafer': {w!r} is not a wafer number (an integer >= 1)") from None
         if wafer < 1:
             raise LotDataError(f"{where}: column 'wafer': {w!r} must be >= 1 (the first wafer of the lot is 1)")
-        from ..inputs.units import uncertainty_text, value_and_unit
+        from ..inputs.units import read_value_cells
 
-        try:  # a value written with its unit ("512 nm"), the unit column empty or the same
-            rec["value"], rec["unit"] = value_and_unit(rec.get("value", ""), rec.get("unit", ""))
+        try:  # "512 nm", "±4 nm"
+            read_value_cells(rec)
         except ValueError as exc:
-            raise LotDataError(f"{where}: column 'value': {exc}") from None
-        if rec.get("uncertainty"):  # "±4 nm": its unit must be the value's (the unit column's; none for a plain number)
-            try:
-                rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
-            except ValueError as exc:
-                raise LotDataError(f"{where}: column 'uncertainty': {exc}") from None
+            raise LotDataError(f"{where}: {exc}") from None
         unit = rec.get("unit", "")
         if not unit:
             raise LotDataError(f"{where}: column 'unit' is empty; a lot row is a length (nm, angstrom, um)")

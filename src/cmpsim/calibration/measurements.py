@@ -206,17 +206,12 @@ def read_measurements(path, text: str | None = None) -> list:
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
                                    f"{', '.join(list(STRUCTURE_QUANTITIES) + list(THERMAL_QUANTITIES))}")
-        from ..inputs.units import uncertainty_text, value_and_unit
+        from ..inputs.units import read_value_cells
 
-        try:  # a value written with its unit ("50 nm"), the unit column empty or the same
-            rec["value"], rec["unit"] = value_and_unit(rec["value"], rec["unit"])
+        try:  # "50 nm", "±4 nm"
+            read_value_cells(rec)
         except ValueError as exc:
-            raise MeasurementError(f"{where}: column 'value': {exc}") from None
-        if rec.get("uncertainty"):  # "±4 nm": its unit must be the value's (the unit column's; none for a plain number)
-            try:
-                rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
-            except ValueError as exc:
-                raise MeasurementError(f"{where}: column 'uncertainty': {exc}") from None
+            raise MeasurementError(f"{where}: {exc}") from None
         if "unit" not in header and not rec["unit"] and rec["value"] and q != "friction_coefficient":
             raise MeasurementError(f"{where0}: required column 'unit' is missing (header: {', '.join(header)}); give it, or the unit after "
                                    f"every value ('50 nm'): line {lineno} has none")

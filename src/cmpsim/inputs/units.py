@@ -24,7 +24,9 @@ import re
 from functools import lru_cache
 from typing import Any
 
-__all__ = ["normalise_unit", "value_and_unit", "uncertainty_text", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
+from ..io import is_number
+
+__all__ = ["normalise_unit", "value_and_unit", "uncertainty_text", "read_value_cells", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
 ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "a/s": "angstrom/second", "å/s": "angstrom/second", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
@@ -86,6 +88,21 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
     if unit.strip() and inside.replace(" ", "").lower() != unit.replace(" ", "").lower():
         raise ValueError(f"{value!r} carries the unit {inside!r} but the unit column says {unit!r}; give the unit in one place")
     return m.group(1), inside
+
+
+def read_value_cells(rec: dict) -> None:
+    """A data row's ``value``, ``unit`` and ``uncertainty`` cells read in place: a value written with its unit
+    (``"512 nm"``, the unit cell empty or the same), an uncertainty with its plus-minus sign (``"±4 nm"``, in
+    the value's unit). ValueError ``column 'NAME': why``."""
+    try:
+        rec["value"], rec["unit"] = value_and_unit(rec.get("value", ""), rec.get("unit", ""))
+    except ValueError as exc:
+        raise ValueError(f"column 'value': {exc}") from None
+    if rec.get("uncertainty"):
+        try:
+            rec["uncertainty"] = value_and_unit(uncertainty_text(rec["uncertainty"]), rec["unit"] or "(none)")[0]
+        except ValueError as exc:
+            raise ValueError(f"column 'uncertainty': {exc}") from None
 
 
 def uncertainty_text(text: str) -> str:
@@ -244,20 +261,13 @@ def parse_list(value: Any, unit: str, name: str = "value", example: str | None =
             raise ValueError(f"{name}: {value!r} has an empty item; expected comma-separated numbers and one unit, e.g. '3, 3.5, 4 {example or unit}'")
         last = pieces[-1]
         number = last.split()[0] if last.split() else last
-        trailing = last[len(number):].strip() if _is_number(number) else ""
-        items = [q + (" " + trailing if trailing and _is_number(q) else "") for q in pieces[:-1]] + [last]
-        return tuple(to_si(q if not _is_number(q) else float(q), unit, name, example) for q in items)
+        trailing = last[len(number):].strip() if is_number(number) else ""
+        items = [q + (" " + trailing if trailing and is_number(q) else "") for q in pieces[:-1]] + [last]
+        return tuple(to_si(q if not is_number(q) else float(q), unit, name, example) for q in items)
     if isinstance(value, (list, tuple)):
         return tuple(to_si(v, unit, name, example) for v in value)
     raise ValueError(f"{name} must be a list: comma-separated numbers and one unit (e.g. '3, 3.5, 4 {example or unit}'); got {value!r}")
 
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def to_display(param, value: Any) -> Any:
