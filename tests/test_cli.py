@@ -115,6 +115,20 @@ def test_version_is_the_one_written_in_version_py():
     assert res.exit_code == 0 and res.output == f"cmpsim, version {__version__}\n"
 
 
+
+def test_python_m_cmpsim_is_the_command_line():
+    """``python -m cmpsim`` runs the same command line (a user without the script on PATH), under the same name."""
+    import subprocess
+    import sys
+
+    from cmpsim._version import __version__
+
+    proc = subprocess.run([sys.executable, "-m", "cmpsim", "--version"], capture_output=True, text=True, timeout=120)
+    assert proc.returncode == 0 and proc.stdout == f"cmpsim, version {__version__}\n"
+    bad = subprocess.run([sys.executable, "-m", "cmpsim", "die", "--window", "0um", "lines"], capture_output=True, text=True, timeout=120)
+    assert bad.returncode == 2 and "Traceback" not in bad.stderr
+
+
 #: The one line the command line prints for the warning of a reference case that removes nothing
 #: (a rigid pad with the measured 5 um summits hydroplanes there).
 NAN_WARNING = (

@@ -28,7 +28,7 @@ FLOORS: tuple[tuple[str, str, tuple[str, ...]], ...] = (
     ("results", "the outputs with units and meanings; the result of one point; uniformity", ("results",)),
     ("solver", "the driver: set-up, the wafer problem, load balance, equilibrium, post-processing; one Config in, one Result out; the runner every study shares", ("solver",)),
     ("studies", "many points: the head's studies, the polisher over time (recipes, end point, pad temperature, lot control, a die riding along the steps), sweeps, validation, reproduction, calibration, the die model and the layouts it reads; test tools", ("head", "polisher", "layout", "sweeps", "validation", "reproduction", "calibration", "die", "testing")),
-    ("faces", "what people call: the package entrance, the command line, the web", ("cmpsim", "cli", "web")),
+    ("faces", "what people call: the package entrance, the command line (also `python -m cmpsim`), the web", ("cmpsim", "__main__", "cli", "web")),
 )
 #: Modules any floor may import; they import nothing of cmpsim.
 UTILITIES = ("io", "_version", "tables")
