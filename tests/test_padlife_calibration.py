@@ -155,6 +155,52 @@ def test_calibrate_from_the_command_line_writes_the_pad_life_and_lot_and_validat
     assert np.sqrt(np.mean((removed0 - [r.value for r in records]) ** 2)) > 20e-9
 
 
+def test_a_lot_under_the_fabs_own_control_is_replayed_at_its_logged_times(tmp_path):
+    """A fab's lot is run by its own controller, whose model is not cmpsim's. Here: a pad that glazes twice
+    as fast, controlled by a double EWMA whose pad model is the default one; each wafer's removal and polish
+    time logged. With the times (column ``time``) the calibration replays them and recovers k_w within its
+    interval; the replay of the true pad gives the logged removals exactly."""
+    from cmpsim.calibration.lotdata import read_lot_rows
+    from cmpsim.polisher.lot import run_lot
+
+    d = default_constants()
+    true = {"pad_wear_coefficient": 2 * d["pad_wear_coefficient"]}
+    fab = run_lot(RECIPE, WAFERS, control="ewma", conditioning="none", seed=0, overrides=dict(COARSE), pad_constants=true,
+                  model_pad_constants=d, zone_feedback=False)
+    rng = np.random.default_rng(3)
+    lot_csv = tmp_path / "fab_lot.csv"
+    lot_csv.write_text("dataset,quantity,value,unit,uncertainty,wafer,time\n" + "".join(
+        f"fab_lot,removal,{(w.incoming_mean - w.final_thickness_mean + rng.normal(0, NOISE)) * 1e9:.4f},nm,1,{w.index},{w.polish_time!r} s\n"
+        for w in fab.wafers))
+    records = read_lot_rows(lot_csv, lot_csv.read_text())
+    assert [r.time for r in records] == [w.polish_time for w in fab.wafers]
+    setting = LotSetting(RECIPE, conditioning="none", control="ewma", seed=0, overrides=dict(COARSE))
+    replay = predict_lot(records, true, setting)
+    assert np.allclose(replay, [w.incoming_mean - w.final_thickness_mean for w in fab.wafers], rtol=0, atol=1e-15)
+    cal = calibrate_padlife(records, setting)
+    lo, hi = cal.ci95["pad_wear_coefficient"]
+    assert cal.free == ["pad_wear_coefficient"] and lo < true["pad_wear_coefficient"] < hi
+
+
+def test_logged_times_are_all_or_none_and_one_per_wafer(tmp_path):
+    from cmpsim.calibration.lotdata import LotDataError, logged_times, read_lot_rows
+
+    def rows(text):
+        f = tmp_path / "lot.csv"
+        f.write_text("dataset,quantity,value,unit,wafer,time\n" + text)
+        return read_lot_rows(f, f.read_text())
+
+    assert logged_times(rows("lot,removal,250,nm,1,1 min\nlot,thickness,240,nm,1,60 s\nlot,removal,240,nm,2,61.5 s\n")) == [60.0, 61.5]
+    assert logged_times(rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\n")) is None
+    with pytest.raises(LotDataError, match=r"wafers 2 have none"):
+        logged_times(rows("lot,removal,250,nm,1,60 s\nlot,removal,240,nm,3,60 s\n"))
+    with pytest.raises(LotDataError, match=r"wafer 1 was polished for 60 s in another row, 62 s here"):
+        logged_times(rows("lot,removal,250,nm,1,60 s\nlot,thickness,240,nm,1,62 s\n"))
+    for bad in ("-5 s", "60 nm", "abc"):
+        with pytest.raises(LotDataError, match=r"lot.csv:2: .*time"):
+            rows(f"lot,removal,250,nm,1,{bad}\n")
+
+
 def test_lot_rows_without_a_recipe_are_noted_and_a_recipe_without_lot_rows_is_refused(tmp_path):
     lot_csv = tmp_path / "lot.csv"
     lot_csv.write_text("dataset,quantity,value,unit,uncertainty,wafer\nlot,removal,250,nm,1,1\nlot,removal,240,nm,1,2\n")

@@ -101,15 +101,21 @@ def compare_lots(records, recipe, overrides: dict | None = None, control: str = 
     for r in records:
         if r.film is not None and r.film != top:
             raise ValueError(f"{r.path}:{r.line}: column 'film': {r.film!r} is not the recipe's top film ({top}), the film a lot measures")
+    from .lotdata import logged_times
+
     n = max(r.wafer for r in records)
+    times = logged_times(records)  # a lot under the fab's own control: replayed at its logged times
+    if times:
+        control = "none"
     lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {}, pad_constants=pad_constants, conditioning=conditioning,
-                  qualification=qualification)
+                  qualification=qualification, polish_times=times)
     rows = []
     for r in records:
         w = lot.wafers[r.wafer - 1]
         model = w.final_thickness_mean if r.quantity == "thickness" else w.incoming_mean - w.final_thickness_mean
         rows.append(_row(r.dataset, r.quantity, f"wafer={r.wafer}, film={top}", "nm", 1e-9, r.value, r.uncertainty, float(model), r.source))
-    note = f"cmpsim lot {parsed.source} ({n} wafers, control {control}, seed {seed}" + (", calibrated pad life)" if pad_constants else ")")
+    note = (f"cmpsim lot {parsed.source} ({n} wafers, " + ("replayed at the logged polish times" if times else f"control {control}")
+            + f", seed {seed}" + (", calibrated pad life)" if pad_constants else ")"))
     return KindComparison("lot", "nm", rows, _rms(rows), note)
 
 

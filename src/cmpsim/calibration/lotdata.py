@@ -10,6 +10,7 @@ A fab keeps the post-polish metrology of every wafer of a lot. In the CSV format
 | ``value``, ``unit`` | yes | a length with its unit (``nm``, ``angstrom``, ``um``) |
 | ``uncertainty`` | no | one standard uncertainty, in ``unit`` |
 | ``film`` | no | the film measured (default: the recipe's target film) |
+| ``time`` | no | the polish time of the recipe's timed step on this wafer, as the tool logged it (with a unit: ``62 s``). Given on every wafer up to the last measured, the lot is replayed at these times (:func:`logged_times`) instead of being run by cmpsim's controller: a lot under the fab's own run-to-run control |
 | ``dataset``, ``source``, ``label``, ``note`` | no | as in every data file |
 
 :func:`read_lot_rows` reads them (SI) and refuses a bad row naming its line and column;
@@ -23,7 +24,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "read_lot_rows"]
+__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "read_lot_rows", "logged_times"]
 
 #: Per-wafer quantities of a lot: name -> meaning (both lengths, m).
 LOT_QUANTITIES = {
@@ -31,7 +32,7 @@ LOT_QUANTITIES = {
     "removal": "wafer-mean depth of film removed by the recipe",
 }
 #: The columns a lot row may fill.
-LOT_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "wafer", "film", "source", "label", "note")
+LOT_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "wafer", "film", "time", "source", "label", "note")
 
 
 class LotDataError(ValueError):
@@ -52,6 +53,8 @@ class LotRecord:
     source: str = ""
     label: str = ""
     path: str = ""
+    #: the polish time (s) of the recipe's timed step on this wafer, as logged (None: not given)
+    time: float | None = None
 
 
 def _length(rec: dict, column: str, unit: str, where: str) -> float:
@@ -124,6 +127,39 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
             unc = _length(rec, "uncertainty", unit, where)
             if not unc > 0:
                 raise LotDataError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")
+        t = None
+        if rec.get("time"):
+            from ..inputs.units import to_si
+
+            try:
+                t = float(to_si(rec["time"], "s", "column 'time'", "62 s"))
+            except ValueError as exc:
+                raise LotDataError(f"{where}: {exc}") from None
+            if not (math.isfinite(t) and t > 0):
+                raise LotDataError(f"{where}: column 'time' = {rec['time']!r} must be a polish time > 0 s")
         out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
-                             lineno, rec.get("source", ""), rec.get("label", ""), str(path)))
+                             lineno, rec.get("source", ""), rec.get("label", ""), str(path), t))
     return out
+
+
+def logged_times(records) -> list[float] | None:
+    """The polish times (s) of wafers 1..N (N the last measured) that lot ``records`` logged, to replay the lot
+    at them; None if no record gives a time. LotDataError naming the wafers without one, or a wafer
+    whose rows give two different times."""
+    timed = [r for r in records if r.time is not None]
+    if not timed:
+        return None
+    n = max(r.wafer for r in records)
+    times: dict[int, float] = {}
+    for r in timed:
+        if r.wafer in times and times[r.wafer] != r.time:
+            raise LotDataError(f"{r.path}:{r.line}: column 'time': wafer {r.wafer} was polished for {times[r.wafer]:g} s in another row, "
+                               f"{r.time:g} s here")
+        times[r.wafer] = r.time
+    missing = [w for w in range(1, n + 1) if w not in times]
+    if missing:
+        shown = ", ".join(map(str, missing[:10])) + (f" and {len(missing) - 10} more" if len(missing) > 10 else "")
+        raise LotDataError(f"{timed[0].path}: column 'time': a lot is replayed at its logged polish times, which every wafer up to "
+                           f"the last measured ({n}) needs; wafers {shown} have none (give a time on every wafer, or on none: "
+                           "then the lot is run by cmpsim's controller)")
+    return [times[w] for w in range(1, n + 1)]

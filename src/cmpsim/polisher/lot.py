@@ -242,6 +242,7 @@ def run_lot(
     pad_constants: dict | None = None,
     cache: dict | None = None,
     model_pad_constants: dict | None = None,
+    polish_times=None,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -307,6 +308,10 @@ def run_lot(
         of the pad's life through the polish times and pressures it commanded (its glazing clock
         and drift prior, eqs. C4-C5). A model other than the pad (another pad's calibration, or a
         deliberate error) shows how the control holds when its model is wrong (docs/polisher.md).
+    polish_times : sequence of float, optional
+        Replay a logged lot: wafer k's timed step (the last one that ends at a time) is polished for
+        ``polish_times[k]`` s (one per wafer, > 0), as a fab's own run-to-run control commanded it; the
+        recipe's other steps and pressures as written. Needs ``control = "none"``.
     after_wafer : callable, optional
         Called with the wafer's :class:`WaferRecord` after each wafer (and its checkpoint).
     """
@@ -334,6 +339,14 @@ def run_lot(
         raise ValueError("resume needs the checkpoint to resume from (cmpsim lot --resume needs --out DIR)")
     target = recipe.target.remaining
     controlled = control != "none"
+    if polish_times is not None:
+        polish_times = [float(t) for t in polish_times]
+        if controlled:
+            raise ValueError(f"polish_times replays the times a lot was polished at; control must be 'none', got {control!r}")
+        if len(polish_times) < wafers or not all(math.isfinite(t) and t > 0 for t in polish_times[:wafers]):
+            raise ValueError(f"polish_times needs a time > 0 s for each of the {wafers} wafers; got {len(polish_times)}")
+        polish_times = polish_times[:wafers]
+        replay_k = _controlled_step(recipe)  # the step whose time the lot logged
     if controlled and target is None:
         raise RecipeError(f"{recipe.source}: control {control!r} needs the recipe's [target] remaining thickness")
     overrides = dict(overrides or {})
@@ -345,6 +358,8 @@ def run_lot(
         inputs["pad_constants"] = repr(sorted((k, float(v)) for k, v in pad_constants.items()))
     if model_pad_constants is not None:
         inputs["model_pad_constants"] = repr(sorted((k, float(v)) for k, v in model_pad_constants.items()))
+    if polish_times is not None:
+        inputs["polish_times"] = repr(polish_times)
 
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
         cooled = idle(result.pad_state, idle_time, base)
@@ -379,6 +394,8 @@ def run_lot(
         inc_mean = float(np.sum(weights * inc))
         wafer_recipe, ov = recipe, dict(overrides)
         plan, predicted = None, None
+        if polish_times is not None:  # a logged lot, replayed
+            wafer_recipe = _with_step_time(recipe, replay_k, polish_times[k])
         if controlled:
             pressures = start_pressures
             if feedback is not None:
@@ -441,11 +458,8 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
     """The controlled wafer: its predicted rate (m/s; eq. C4 at its pad age, times Z6), polish time
     (s; eq. C0) and recipe. On the glazing clock the wafer's age depends on its own polish time:
     the fixed point t = (incoming - target) / (rate at the age of a wafer of t), iterated to 1e-9 s."""
-    steps = list(recipe.steps)
-
     def with_time(t):
-        steps[step_k] = replace(steps[step_k], time=t)
-        return replace(recipe, steps=tuple(steps))
+        return _with_step_time(recipe, step_k, t)
 
     if estimator.clock != "glazing":
         predicted = _prediction(estimator, float(index), factor, index)
@@ -468,6 +482,13 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
         if done:
             break
     return predicted, t, with_time(t)
+
+
+def _with_step_time(recipe, step_k: int, t: float):
+    """``recipe`` with step ``step_k`` polished for ``t`` s."""
+    steps = list(recipe.steps)
+    steps[step_k] = replace(steps[step_k], time=t)
+    return replace(recipe, steps=tuple(steps))
 
 
 def _prediction(estimator, age: float, factor: float, index: int) -> float:
