@@ -6,6 +6,7 @@ API and through `cmpsim calibrate LOT.csv --recipe`; the process file carries th
 per-wafer lot is shipped (docs/calibrate.md, section 9): the data here are synthetic."""
 
 import json
+from dataclasses import replace
 import math
 from importlib import resources
 from pathlib import Path
@@ -182,6 +183,30 @@ def test_a_lot_under_the_fabs_own_control_is_replayed_at_its_logged_times(tmp_pa
     assert cal.free == ["pad_wear_coefficient"] and lo < true["pad_wear_coefficient"] < hi
 
 
+def test_a_lot_whose_controller_moved_the_zones_is_replayed_with_its_logged_zone_pressures(tmp_path):
+    """A controller with zone feedback sets each wafer's zone pressures too: logged in ``zone_pressures`` (one
+    quoted cell, psi), they are replayed with the times, and the removals come back exactly; the times
+    alone (the recipe's pressures) do not give them."""
+    from cmpsim.calibration.lotdata import read_lot_rows
+    from cmpsim.polisher.lot import run_lot
+
+    d = default_constants()
+    fab = run_lot(RECIPE, 3, control="ewma", conditioning="none", seed=0, overrides=dict(COARSE), model_pad_constants=d)
+    assert len({w.zone_pressures for w in fab.wafers}) > 1  # the feedback moved them
+    psi = 6894.757293168361
+    lines = "".join(f'fab,removal,{(w.incoming_mean - w.final_thickness_mean) * 1e9!r},nm,{w.index},{w.polish_time!r} s,'
+                    f'"{", ".join(repr(p / psi) for p in w.zone_pressures)} psi"\n' for w in fab.wafers)
+    lot_csv = tmp_path / "fab_zones.csv"
+    lot_csv.write_text("dataset,quantity,value,unit,wafer,time,zone_pressures\n" + lines)
+    records = read_lot_rows(lot_csv, lot_csv.read_text())
+    assert records[1].zone_pressures == pytest.approx(fab.wafers[1].zone_pressures, rel=1e-12)
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    removed = [w.incoming_mean - w.final_thickness_mean for w in fab.wafers]
+    assert np.allclose(predict_lot(records, d, setting), removed, rtol=0, atol=1e-13)
+    times_only = [replace(r, zone_pressures=None) for r in records]
+    assert np.max(np.abs(predict_lot(times_only, d, setting) - removed)) > 1e-10
+
+
 def test_logged_times_are_all_or_none_and_one_per_wafer(tmp_path):
     from cmpsim.calibration.lotdata import LotDataError, logged_times, read_lot_rows
 
@@ -194,7 +219,7 @@ def test_logged_times_are_all_or_none_and_one_per_wafer(tmp_path):
     assert logged_times(rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\n")) is None
     with pytest.raises(LotDataError, match=r"wafers 2 have none"):
         logged_times(rows("lot,removal,250,nm,1,60 s\nlot,removal,240,nm,3,60 s\n"))
-    with pytest.raises(LotDataError, match=r"wafer 1 was polished for 60 s in another row, 62 s here"):
+    with pytest.raises(LotDataError, match=r"wafer 1 has 60 s in another row, 62 s here"):
         logged_times(rows("lot,removal,250,nm,1,60 s\nlot,thickness,240,nm,1,62 s\n"))
     for bad in ("-5 s", "60 nm", "abc"):
         with pytest.raises(LotDataError, match=r"lot.csv:2: .*time"):

@@ -101,14 +101,14 @@ def compare_lots(records, recipe, overrides: dict | None = None, control: str = 
     for r in records:
         if r.film is not None and r.film != top:
             raise ValueError(f"{r.path}:{r.line}: column 'film': {r.film!r} is not the recipe's top film ({top}), the film a lot measures")
-    from .lotdata import logged_times
+    from .lotdata import logged_times, logged_zone_pressures
 
     n = max(r.wafer for r in records)
-    times = logged_times(records)  # a lot under the fab's own control: replayed at its logged times
+    times = logged_times(records)  # a lot under the fab's own control: replayed at its logged times (and zone pressures)
     if times:
         control = "none"
     lot = run_lot(parsed, n, control=control, seed=seed, overrides=overrides or {}, pad_constants=pad_constants, conditioning=conditioning,
-                  qualification=qualification, polish_times=times)
+                  qualification=qualification, polish_times=times, polish_zone_pressures=logged_zone_pressures(records))
     rows = []
     for r in records:
         w = lot.wafers[r.wafer - 1]

@@ -11,6 +11,7 @@ A fab keeps the post-polish metrology of every wafer of a lot. In the CSV format
 | ``uncertainty`` | no | one standard uncertainty, in ``unit`` |
 | ``film`` | no | the film measured (default: the recipe's target film) |
 | ``time`` | no | the polish time of the recipe's timed step on this wafer, as the tool logged it (with a unit: ``62 s``). Given on every wafer up to the last measured, the lot is replayed at these times (:func:`logged_times`) instead of being run by cmpsim's controller: a lot under the fab's own run-to-run control |
+| ``zone_pressures`` | no | the head's zone pressures on this wafer as logged, one quoted cell (``"3.1, 3, 2.9, 3, 3.2 psi"``), with ``time``: replayed too (:func:`logged_zone_pressures`) |
 | ``dataset``, ``source``, ``label``, ``note`` | no | as in every data file |
 
 :func:`read_lot_rows` reads them (SI) and refuses a bad row naming its line and column;
@@ -24,7 +25,7 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "read_lot_rows", "logged_times"]
+__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "read_lot_rows", "logged_times", "logged_zone_pressures"]
 
 #: Per-wafer quantities of a lot: name -> meaning (both lengths, m).
 LOT_QUANTITIES = {
@@ -32,7 +33,7 @@ LOT_QUANTITIES = {
     "removal": "wafer-mean depth of film removed by the recipe",
 }
 #: The columns a lot row may fill.
-LOT_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "wafer", "film", "time", "source", "label", "note")
+LOT_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "wafer", "film", "time", "zone_pressures", "source", "label", "note")
 
 
 class LotDataError(ValueError):
@@ -55,6 +56,8 @@ class LotRecord:
     path: str = ""
     #: the polish time (s) of the recipe's timed step on this wafer, as logged (None: not given)
     time: float | None = None
+    #: the head's zone pressures (Pa) on this wafer, as logged (None: not given)
+    zone_pressures: tuple | None = None
 
 
 def _length(rec: dict, column: str, unit: str, where: str) -> float:
@@ -137,8 +140,18 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
                 raise LotDataError(f"{where}: {exc}") from None
             if not (math.isfinite(t) and t > 0):
                 raise LotDataError(f"{where}: column 'time' = {rec['time']!r} must be a polish time > 0 s")
+        zp = None
+        if rec.get("zone_pressures"):
+            from ..inputs.units import parse_list
+
+            try:
+                zp = tuple(float(v) for v in parse_list(rec["zone_pressures"], "Pa", "column 'zone_pressures'", "3, 3, 3.5 psi"))
+            except ValueError as exc:
+                raise LotDataError(f"{where}: {exc}") from None
+            if not all(math.isfinite(v) and v > 0 for v in zp):
+                raise LotDataError(f"{where}: column 'zone_pressures' = {rec['zone_pressures']!r}: every pressure must be > 0")
         out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
-                             lineno, rec.get("source", ""), rec.get("label", ""), str(path), t))
+                             lineno, rec.get("source", ""), rec.get("label", ""), str(path), t, zp))
     return out
 
 
@@ -146,20 +159,36 @@ def logged_times(records) -> list[float] | None:
     """The polish times (s) of wafers 1..N (N the last measured) that lot ``records`` logged, to replay the lot
     at them; None if no record gives a time. LotDataError naming the wafers without one, or a wafer
     whose rows give two different times."""
-    timed = [r for r in records if r.time is not None]
-    if not timed:
+    return _per_wafer(records, "time", "polish times")
+
+
+def logged_zone_pressures(records) -> list[tuple] | None:
+    """The zone pressures (Pa) of wafers 1..N that lot ``records`` logged (as :func:`logged_times`); None if none."""
+    return _per_wafer(records, "zone_pressures", "zone pressures")
+
+
+def _per_wafer(records, attr: str, what: str) -> list | None:
+    """The logged ``attr`` of wafers 1..N (N the last measured), None if no record gives one; LotDataError naming
+    the wafers without one, or a wafer whose rows give two."""
+    given = [r for r in records if getattr(r, attr) is not None]
+    if not given:
         return None
     n = max(r.wafer for r in records)
-    times: dict[int, float] = {}
-    for r in timed:
-        if r.wafer in times and times[r.wafer] != r.time:
-            raise LotDataError(f"{r.path}:{r.line}: column 'time': wafer {r.wafer} was polished for {times[r.wafer]:g} s in another row, "
-                               f"{r.time:g} s here")
-        times[r.wafer] = r.time
-    missing = [w for w in range(1, n + 1) if w not in times]
+    seen: dict[int, object] = {}
+    for r in given:
+        v = getattr(r, attr)
+        if r.wafer in seen and seen[r.wafer] != v:
+            raise LotDataError(f"{r.path}:{r.line}: column {attr!r}: wafer {r.wafer} has {_shown(seen[r.wafer])} in another row, "
+                               f"{_shown(v)} here")
+        seen[r.wafer] = v
+    missing = [w for w in range(1, n + 1) if w not in seen]
     if missing:
         shown = ", ".join(map(str, missing[:10])) + (f" and {len(missing) - 10} more" if len(missing) > 10 else "")
-        raise LotDataError(f"{timed[0].path}: column 'time': a lot is replayed at its logged polish times, which every wafer up to "
-                           f"the last measured ({n}) needs; wafers {shown} have none (give a time on every wafer, or on none: "
-                           "then the lot is run by cmpsim's controller)")
-    return [times[w] for w in range(1, n + 1)]
+        raise LotDataError(f"{given[0].path}: column {attr!r}: a lot is replayed at its logged {what}, which every wafer up to "
+                           f"the last measured ({n}) needs; wafers {shown} have none (give it on every wafer, or on none: then "
+                           "the lot is run by cmpsim's controller)")
+    return [seen[w] for w in range(1, n + 1)]
+
+
+def _shown(v) -> str:
+    return f"{v:g} s" if isinstance(v, float) else ", ".join(f"{p:g}" for p in v) + " Pa"

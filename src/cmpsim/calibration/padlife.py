@@ -66,13 +66,14 @@ def predict_lot(records, constants: dict | None, setting: LotSetting) -> np.ndar
     for r in records:
         if r.film is not None and r.film != top:
             raise ValueError(f"{r.path}:{r.line}: column 'film': {r.film!r} is not the recipe's top film ({top}), the film a lot measures")
-    from .lotdata import logged_times
+    from .lotdata import logged_times, logged_zone_pressures
 
     n = max(r.wafer for r in records)
-    times = logged_times(records)  # a lot under the fab's own control: replayed at its logged times
+    times = logged_times(records)  # a lot under the fab's own control: replayed at its logged times (and zone pressures)
     lot = run_lot(setting.recipe, n, conditioning=setting.conditioning, control="none" if times else setting.control, seed=setting.seed,
                   overrides=dict(setting.overrides), idle_time=setting.idle_time, qualification=setting.qualification,
-                  pad_constants=dict(constants or {}), cache=setting.cache, polish_times=times)
+                  pad_constants=dict(constants or {}), cache=setting.cache, polish_times=times,
+                  polish_zone_pressures=logged_zone_pressures(records))
     out = []
     for r in records:
         w = lot.wafers[r.wafer - 1]

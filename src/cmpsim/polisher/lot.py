@@ -243,6 +243,7 @@ def run_lot(
     cache: dict | None = None,
     model_pad_constants: dict | None = None,
     polish_times=None,
+    polish_zone_pressures=None,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -312,6 +313,8 @@ def run_lot(
         Replay a logged lot: wafer k's timed step (the last one that ends at a time) is polished for
         ``polish_times[k]`` s (one per wafer, > 0), as a fab's own run-to-run control commanded it; the
         recipe's other steps and pressures as written. Needs ``control = "none"``.
+    polish_zone_pressures : sequence of tuples, optional
+        With ``polish_times``: each wafer's zone pressures (Pa) as logged, for every step.
     after_wafer : callable, optional
         Called with the wafer's :class:`WaferRecord` after each wafer (and its checkpoint).
     """
@@ -347,6 +350,13 @@ def run_lot(
             raise ValueError(f"polish_times needs a time > 0 s for each of the {wafers} wafers; got {len(polish_times)}")
         polish_times = polish_times[:wafers]
         replay_k = _controlled_step(recipe)  # the step whose time the lot logged
+    if polish_zone_pressures is not None:
+        if polish_times is None:
+            raise ValueError("polish_zone_pressures replays a logged lot: give its polish_times too")
+        polish_zone_pressures = [tuple(float(p) for p in z) for z in polish_zone_pressures]
+        if len(polish_zone_pressures) < wafers:
+            raise ValueError(f"polish_zone_pressures needs the zone pressures of each of the {wafers} wafers; got {len(polish_zone_pressures)}")
+        polish_zone_pressures = polish_zone_pressures[:wafers]
     if controlled and target is None:
         raise RecipeError(f"{recipe.source}: control {control!r} needs the recipe's [target] remaining thickness")
     overrides = dict(overrides or {})
@@ -360,6 +370,8 @@ def run_lot(
         inputs["model_pad_constants"] = repr(sorted((k, float(v)) for k, v in model_pad_constants.items()))
     if polish_times is not None:
         inputs["polish_times"] = repr(polish_times)
+    if polish_zone_pressures is not None:
+        inputs["polish_zone_pressures"] = repr(polish_zone_pressures)
 
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
         cooled = idle(result.pad_state, idle_time, base)
@@ -396,6 +408,8 @@ def run_lot(
         plan, predicted = None, None
         if polish_times is not None:  # a logged lot, replayed
             wafer_recipe = _with_step_time(recipe, replay_k, polish_times[k])
+            if polish_zone_pressures is not None:
+                ov["zone_pressures"] = polish_zone_pressures[k]
         if controlled:
             pressures = start_pressures
             if feedback is not None:
