@@ -173,9 +173,15 @@ def wear_through(pad_life: PadLife, steps, life: PadLifeState, time_step: float)
             clock += dt
             times.append(clock)
             factors.append(wear.factor(life))
-    t, f = np.asarray(times), np.asarray(factors)
+    return time_mean(times, factors), life
+
+
+def time_mean(times, values) -> float:
+    """The trapezoid mean of ``values`` over ``times`` (s), as the lot records a wafer's rate factor; the
+    first value for a wafer of no time."""
+    t, f = np.asarray(times, dtype=float), np.asarray(values, dtype=float)
     span = t[-1] - t[0]
-    return (float(np.trapezoid(f, t) / span) if span > 0 else float(f[0])), life
+    return float(np.trapezoid(f, t) / span) if span > 0 else float(f[0])
 
 
 class GlazingClock:
