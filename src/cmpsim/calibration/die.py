@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .measurements import StructureRecord
-from .scalefit import ScaleFit, log_intervals
+from .scalefit import ScaleFit, fit_statistics
 from .uncertainty import central_jacobian
 
 __all__ = ["DIE_CONSTANTS", "ISOLATED_PITCH", "TestStructure", "DieCalibration", "predict_die", "calibrate_die",
@@ -480,14 +480,8 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
         raise ValueError(f"free {', '.join(flat)}: these test structures do not change with {'it' if len(flat) == 1 else 'them'} "
                          "(column of the Jacobian zero at the fit): not identifiable from these data, nothing fitted; free the "
                          "constants the structures depend on (without free the data choose them)")
-    r1 = resid(z)
-    chi2 = float(np.sum(r1**2))
-    dof = len(records) - len(free)
-    notes: list[str] = []
-    cov = _covariance(J, chi2, dof, absolute, notes)
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
-    se, corr, ci, stderr = log_intervals(cov, free, vals)
-    notes += _identifiability(free, J, se, corr, vals, lo, hi)
+    chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi)
     if auto:
         held = [n for n in DIE_CONSTANTS if n not in free and n not in fixed and n not in {k for r in records for k in r.inputs}]
         if held:
@@ -495,47 +489,6 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
     m1 = predict_die(records, {**fixed, **vals}, config)
     return DieCalibration(list(free), vals, {n: float(s0[n]) for n in free}, stderr, ci, corr, cov, records, y, m0, m1, chi2, dof,
                           absolute, reasons, notes, fixed, config, bool(fit.success), nfev[0])
-
-
-def _covariance(J, chi2, dof, absolute, notes) -> np.ndarray:
-    n = J.shape[1]
-    jtj = J.T @ J
-    try:
-        if np.linalg.cond(jtj) > 1e14:
-            raise np.linalg.LinAlgError
-        cov = np.linalg.inv(jtj)
-    except np.linalg.LinAlgError:
-        notes.append("J^T J is singular: the data do not determine every free constant (their standard errors are infinite)")
-        return np.full((n, n), np.inf)
-    if not absolute:
-        if dof > 0:
-            cov = cov * (chi2 / dof)
-        else:
-            notes.append("no degrees of freedom and no uncertainties: the intervals are undefined")
-            cov = np.full((n, n), np.inf)
-    return cov
-
-
-def _identifiability(free, J, se, corr, vals, lo, hi) -> list[str]:
-    out = []
-    norm = np.linalg.norm(J, axis=0)
-    for k, n in enumerate(free):
-        if norm[k] < 1e-9 * max(norm.max(), 1e-300):
-            out.append(f"{n}: the data do not depend on it (its column of the Jacobian is zero)")
-        elif not np.isfinite(se[k]) or se[k] > math.log(10.0):
-            out.append(f"{n}: not determined by these data (standard error above a factor 10)")
-        if np.isclose(vals[n], lo[k], rtol=1e-3) or np.isclose(vals[n], hi[k], rtol=1e-3):
-            out.append(f"{n}: ended on a bound ({vals[n]:.4g}); its interval is not meaningful")
-    if np.all(np.isfinite(corr)):
-        for i in range(len(free)):
-            for j in range(i + 1, len(free)):
-                if abs(corr[i, j]) > 0.95:
-                    out.append(f"{free[i]} and {free[j]} cannot be separated by these data (correlation {corr[i, j]:+.3f}): "
-                               "only a combination of them is determined")
-    if J.size:
-        s = np.linalg.svd(J, compute_uv=False)
-        out.append(f"singular values of the whitened Jacobian {', '.join(f'{v:.3g}' for v in s)} (condition {s[0] / max(s[-1], 1e-300):.3g})")
-    return out
 
 
 def heldout_comparison(calibration: DieCalibration, records) -> dict:

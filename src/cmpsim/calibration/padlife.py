@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..physics.padlife import GLAZING_CONSTANTS, check_constants, default_constants
-from .scalefit import ScaleFit, log_intervals
+from .scalefit import ScaleFit, fit_statistics
 
 __all__ = ["GLAZING_CONSTANTS", "LotSetting", "PadLifeCalibration", "default_constants", "check_constants", "predict_lot",
            "choose_free", "start_jacobian", "calibrate_padlife", "padlife_constants"]
@@ -178,7 +178,6 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
     (default: those the records could identify, :func:`choose_free`, kept where the Jacobian at the
     start separates them with one degree of freedom left).
     """
-    from .die import _covariance, _identifiability
     from .uncertainty import central_jacobian
     from .identify import choose
 
@@ -236,15 +235,9 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
         return (predict_lot(records, {**s0, **values_of(z)}, setting) - y) / u
 
     J = central_jacobian(resid, z, len(records), h=1e-3)
-    r1 = resid(z)
-    chi2 = float(np.sum(r1**2))
-    dof = len(records) - len(free)
-    notes: list[str] = list(chosen_again)
-    cov = _covariance(J, chi2, dof, absolute, notes)
     vals = values_of(z)
-    se, corr, ci, stderr = log_intervals(cov, free, vals)
-    # relative to the start (the constants are of order 1e-15 1/Pa: an absolute tolerance would call every value a bound)
-    notes += _identifiability(free, J, se, corr, {n: vals[n] / x0[k] for k, n in enumerate(free)}, lo / x0, hi / x0)
+    # the bounds read relative to the start (the constants are of order 1e-15 1/Pa: an absolute tolerance would call every value a bound)
+    chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi, chosen_again, scale=x0)
     m1 = predict_lot(records, {**s0, **vals}, setting)
     return PadLifeCalibration(free=list(free), values=vals, start={n: float(s0[n]) for n in free}, stderr=stderr, ci95=ci, correlation=corr,
                               covariance=cov, records=records, measured=y, model_before=m0, model_after=m1, chi2=chi2, dof=dof,

@@ -3,11 +3,12 @@ fitted constants with their 95 % intervals and correlations, and the residuals b
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ScaleFit", "log_intervals"]
+__all__ = ["ScaleFit", "log_intervals", "fit_statistics"]
 
 
 def log_intervals(cov: np.ndarray, names, values: dict[str, float]):
@@ -25,6 +26,68 @@ def log_intervals(cov: np.ndarray, names, values: dict[str, float]):
         ci[n] = (values[n] * math.exp(-w), values[n] * math.exp(w)) if np.isfinite(w) and w < 700 else (0.0, math.inf)
         stderr[n] = values[n] * se[k]
     return se, corr, ci, stderr
+
+
+def fit_statistics(J: np.ndarray, residuals: np.ndarray, free, values: dict[str, float], absolute: bool, lo, hi,
+                   notes=(), scale=None):
+    """What a fit in z = ln(value) reports, from its whitened ``residuals`` and Jacobian ``J`` (d residual / dz)
+    at the optimum: (chi2, degrees of freedom, notes, covariance of z, correlation, 95 % intervals, standard
+    errors of the values). The covariance is (J^T J)^-1, scaled by the reduced chi-square unless every
+    point carried an ``absolute`` uncertainty; ``notes`` (said first) gain what the data cannot separate,
+    read with the values and the bounds ``lo``, ``hi`` divided by ``scale`` (default 1: constants of order
+    1e-15 1/Pa are read relative to their start, or every value would sit on a bound)."""
+    chi2 = float(np.sum(residuals**2))
+    dof = len(residuals) - len(free)
+    notes = list(notes)
+    cov = _covariance(J, chi2, dof, absolute, notes)
+    se, corr, ci, stderr = log_intervals(cov, free, values)
+    if scale is None:
+        notes += _identifiability(free, J, se, corr, values, lo, hi)
+    else:
+        notes += _identifiability(free, J, se, corr, {n: values[n] / scale[k] for k, n in enumerate(free)}, lo / scale, hi / scale)
+    return chi2, dof, notes, cov, corr, ci, stderr
+
+
+def _covariance(J, chi2, dof, absolute, notes) -> np.ndarray:
+    n = J.shape[1]
+    jtj = J.T @ J
+    try:
+        if np.linalg.cond(jtj) > 1e14:
+            raise np.linalg.LinAlgError
+        cov = np.linalg.inv(jtj)
+    except np.linalg.LinAlgError:
+        notes.append("J^T J is singular: the data do not determine every free constant (their standard errors are infinite)")
+        return np.full((n, n), np.inf)
+    if not absolute:
+        if dof > 0:
+            cov = cov * (chi2 / dof)
+        else:
+            notes.append("no degrees of freedom and no uncertainties: the intervals are undefined")
+            cov = np.full((n, n), np.inf)
+    return cov
+
+
+def _identifiability(free, J, se, corr, vals, lo, hi) -> list[str]:
+    out = []
+    norm = np.linalg.norm(J, axis=0)
+    for k, n in enumerate(free):
+        if norm[k] < 1e-9 * max(norm.max(), 1e-300):
+            out.append(f"{n}: the data do not depend on it (its column of the Jacobian is zero)")
+        elif not np.isfinite(se[k]) or se[k] > math.log(10.0):
+            out.append(f"{n}: not determined by these data (standard error above a factor 10)")
+        if np.isclose(vals[n], lo[k], rtol=1e-3) or np.isclose(vals[n], hi[k], rtol=1e-3):
+            out.append(f"{n}: ended on a bound ({vals[n]:.4g}); its interval is not meaningful")
+    if np.all(np.isfinite(corr)):
+        for i in range(len(free)):
+            for j in range(i + 1, len(free)):
+                if abs(corr[i, j]) > 0.95:
+                    out.append(f"{free[i]} and {free[j]} cannot be separated by these data (correlation {corr[i, j]:+.3f}): "
+                               "only a combination of them is determined")
+    if J.size:
+        s = np.linalg.svd(J, compute_uv=False)
+        out.append(f"singular values of the whitened Jacobian {', '.join(f'{v:.3g}' for v in s)} (condition {s[0] / max(s[-1], 1e-300):.3g})")
+    return out
+
 
 
 @dataclass

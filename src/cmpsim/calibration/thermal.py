@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .measurements import ThermalRecord
-from .scalefit import ScaleFit, log_intervals
+from .scalefit import ScaleFit, fit_statistics
 from .uncertainty import central_jacobian
 
 __all__ = ["THERMAL_CONSTANTS", "FrictionalPower", "frictional_power", "predict_thermal", "calibrate_thermal", "ThermalCalibration",
@@ -228,7 +228,6 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
     from scipy.optimize import least_squares
 
     from ..inputs.config import Config
-    from .die import _covariance, _identifiability
 
     if isinstance(records, (str, bytes)) or hasattr(records, "__fspath__"):
         from .measurements import read_measurements
@@ -267,14 +266,8 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
                         gtol=1e-14, max_nfev=max_nfev)
     z = fit.x
     J = central_jacobian(resid, z, len(records), h=1e-4)
-    r1 = resid(z)
-    chi2 = float(np.sum(r1**2))
-    dof = len(records) - len(free)
-    notes: list[str] = []
-    cov = _covariance(J, chi2, dof, absolute, notes)
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
-    se, corr, ci, stderr = log_intervals(cov, free, vals)
-    notes += _identifiability(free, J, se, corr, vals, lo, hi)
+    chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi)
     m1 = predict_thermal(records, {**s0, **vals}, base)
     return ThermalCalibration(list(free), vals, {n: float(s0[n]) for n in free}, stderr, ci, corr, cov, records, y, m0, m1, chi2, dof,
                               absolute, reasons, notes, base)
