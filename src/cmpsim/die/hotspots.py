@@ -69,6 +69,16 @@ def _window_boxes(x, y, cell, extent):
     return x0, y0, x1, y1
 
 
+def _window(kind: str, limit: float, v: np.ndarray, boxes, iy: int, ix: int, level: str | None) -> dict:
+    """A listed window: its quantity, the centre of its part inside the die (m), value and limit (m), box, level."""
+    x0, y0, x1, y1 = boxes
+    h = {"kind": kind, "x": float(0.5 * (x0[iy, ix] + x1[iy, ix])), "y": float(0.5 * (y0[iy, ix] + y1[iy, ix])),
+         "value": float(v[iy, ix]), "limit": float(limit), "box": (float(x0[iy, ix]), float(y0[iy, ix]), float(x1[iy, ix]), float(y1[iy, ix]))}
+    if level is not None:
+        h["level"] = level
+    return h
+
+
 def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: str | None = None, sigma: dict | None = None) -> list[dict]:
     """The hotspots of per-window ``fields`` (name -> (ny, nx) array, m) against ``spec`` (kind -> limit, m).
 
@@ -91,11 +101,7 @@ def find_hotspots(fields: dict, x, y, cell: float, extent, spec: dict, level: st
         with np.errstate(invalid="ignore"):
             hit = inside & np.isfinite(v) & (np.abs(v) > limit)
         for iy, ix in zip(*np.nonzero(hit)):
-            h = {"kind": kind, "x": float(0.5 * (x0[iy, ix] + x1[iy, ix])), "y": float(0.5 * (y0[iy, ix] + y1[iy, ix])),
-                 "value": float(v[iy, ix]), "limit": float(limit),
-                 "box": (float(x0[iy, ix]), float(y0[iy, ix]), float(x1[iy, ix]), float(y1[iy, ix]))}
-            if level is not None:
-                h["level"] = level
+            h = _window(kind, limit, v, (x0, y0, x1, y1), iy, ix, level)
             if sigma is not None and kind in sigma:
                 sd = float(np.asarray(sigma[kind])[iy, ix])
                 h["interval"] = [h["value"] - 1.96 * sd, h["value"] + 1.96 * sd]
@@ -158,12 +164,9 @@ def find_at_risk(fields: dict, x, y, cell: float, extent, spec: dict, sigma: dic
     out = []
     for kind, limit, v, sd, _, under, p, (x0, y0, x1, y1) in _graded(fields, sigma, x, y, cell, extent, spec):
         for iy, ix in zip(*np.nonzero(under & (sd > 0) & (p >= threshold))):
-            h = {"kind": kind, "x": float(0.5 * (x0[iy, ix] + x1[iy, ix])), "y": float(0.5 * (y0[iy, ix] + y1[iy, ix])),
-                 "value": float(v[iy, ix]), "limit": limit,
-                 "box": (float(x0[iy, ix]), float(y0[iy, ix]), float(x1[iy, ix]), float(y1[iy, ix])),
-                 "interval": [float(v[iy, ix] - 1.96 * sd[iy, ix]), float(v[iy, ix] + 1.96 * sd[iy, ix])], "probability": float(p[iy, ix])}
-            if level is not None:
-                h["level"] = level
+            h = _window(kind, limit, v, (x0, y0, x1, y1), iy, ix, level)
+            h["interval"] = [float(v[iy, ix] - 1.96 * sd[iy, ix]), float(v[iy, ix] + 1.96 * sd[iy, ix])]
+            h["probability"] = float(p[iy, ix])
             out.append(h)
     out.sort(key=lambda h: -h["probability"])
     return out

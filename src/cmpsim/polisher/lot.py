@@ -307,9 +307,7 @@ def run_lot(
         records.append(record)
         pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
         if controlled:  # the controller's model of the pad follows the wafer's steps as they ran (their logged times)
-            done = [(wafer_recipe.step_config(s, ov), r.duration) for s, r in zip(wafer_recipe.steps, result.steps)]
-            model_age, model_life = wear_through(model, done, model_life, time_step) if total_time > 0 else (None, model_life)
-            model_life = model.idle(model_life, idle_time)
+            model_age, model_life = _model_through(model, wafer_recipe, ov, result, model_life, time_step, idle_time)
         if controlled and total_time > 0:
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
             age = model_age if estimator.clock == "glazing" else float(k + 1)
@@ -359,6 +357,14 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
     return predicted, t, with_time(t)
 
 
+def _model_through(model: PadLife, recipe, overrides, result, life, time_step: float, idle_time: float):
+    """The controller's model of the pad through a polished wafer (its steps at their logged durations) and
+    the idle after it: (the wafer's mean rate factor, its pad-age on the glazing clock; the model's state)."""
+    done = [(recipe.step_config(s, overrides), r.duration) for s, r in zip(recipe.steps, result.steps)]
+    age, life = wear_through(model, done, life, time_step)
+    return age, model.idle(life, idle_time)
+
+
 def _with_step_time(recipe, step_k: int, t: float):
     """``recipe`` with step ``step_k`` polished for ``t`` s."""
     steps = list(recipe.steps)
@@ -404,9 +410,7 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
             first = polish(recipe, overrides=overrides, time_step=time_step, pad_state=pad_state, pad_life=life_model, cache=cache)
             solves += first.solves
             pad_state = between_wafers(first)
-            done = [(recipe.step_config(s, overrides), r.duration) for s, r in zip(recipe.steps, first.steps)]
-            model_age, model_life = wear_through(model, done, model_life, time_step)
-            model_life = model.idle(model_life, idle_time)
+            model_age, model_life = _model_through(model, recipe, overrides, first, model_life, time_step, idle_time)
     else:
         first = polish(recipe, overrides=overrides, time_step=time_step, cache=cache)
         solves = first.solves
