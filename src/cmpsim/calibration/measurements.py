@@ -156,6 +156,16 @@ def _length(rec, column, where, required=False, positive=True):
     return v
 
 
+def _polish_time(rec: dict, where: str) -> float | None:
+    """The row's ``time`` (s; None where the cell is empty); MeasurementError naming the column unless it is > 0 s."""
+    if not rec.get("time"):
+        return None
+    t = _quantity(rec["time"], None, "s", where, "time")
+    if not (math.isfinite(t) and t > 0):
+        raise MeasurementError(f"{where}: column 'time' = {rec['time']!r} must be > 0 s")
+    return t
+
+
 def read_measurements(path, text: str | None = None) -> list:
     """Read a measurement file: a list of :class:`StructureRecord` and :class:`ThermalRecord` (SI).
 
@@ -259,11 +269,7 @@ def read_measurements(path, text: str | None = None) -> list:
             size = _length(rec, "structure_size", where)
             if size is not None and size < w:
                 raise MeasurementError(f"{where}: column 'structure_size': the block ({rec['structure_size']}) is narrower than one line ({rec['line_width']})")
-            t = None
-            if rec.get("time"):
-                t = _quantity(rec["time"], None, "s", where, "time")
-                if not (math.isfinite(t) and t > 0):
-                    raise MeasurementError(f"{where}: column 'time' = {rec['time']!r} must be > 0 s")
+            t = _polish_time(rec, where)
             k = None
             if rec.get("blanket_rate"):
                 k = _quantity(rec["blanket_rate"], None, "m/s", where, "blanket_rate")
@@ -287,12 +293,8 @@ def read_measurements(path, text: str | None = None) -> list:
             for col in header:
                 if rec[col] and (col in _STRUCTURE_COLUMNS[:4] or col in DIE_PARAMETERS) and col not in PARAMETERS:
                     raise MeasurementError(f"{where}: column {col!r} describes a test structure; it has no meaning for {q}")
-            t = None
-            if rec.get("time"):
-                t = _quantity(rec["time"], None, "s", where, "time")
-                if not (math.isfinite(t) and t > 0):
-                    raise MeasurementError(f"{where}: column 'time' = {rec['time']!r} must be > 0 s")
-            elif q == "pad_temperature_rise":
+            t = _polish_time(rec, where)
+            if t is None and q == "pad_temperature_rise":
                 raise MeasurementError(f"{where}: column 'time' is empty; a temperature rise needs the polish time it was reached at")
             flow = None
             if rec.get("slurry_flow_rate"):
