@@ -26,12 +26,13 @@ from .inputs import recipe_overrides
 @click.option("--worn-summits", "worn_summits", is_flag=True, help="The worn pad's summit-height std enters every step's wafer solve (docs/polisher.md: below about 2 um the solver finds no equilibrium).")
 @click.option("--config", "config_path", type=click.Path(dir_okay=False), default=None, help="A configuration file applied to every step unless the step sets the input: a process file of `cmpsim calibrate` applies its fitted constants (and the model choices they need) with the recipe's own tool, and its pad life's glazing and conditioning constants ([calibration.padlife]); any other file the inputs it names. --set wins over it.")
 @click.option("--controller-config", "controller_path", type=click.Path(dir_okay=False), default=None, metavar="FILE", help="The controller's model of the pad's life (its glazing clock and drift prior): the [calibration.padlife] constants of this process file. Default: the pad's own (--config's, else the defaults). A what-if: the pad of --config controlled with the model of another calibration.")
+@click.option("--refit-model", "refit_model", is_flag=True, help="With --control ewma on the glazing clock: after each wafer the controller refits its pad-life model's wear coefficient k_w to the rates measured so far (when they identify it within a factor 2) and replays its filter on the refitted clock: a pad that glazes at another pace than the model's is followed (docs/polisher.md, C6-C8).")
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input for every step unless the step sets it (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): wafers [{index, polish_time (s), removal_rate_mean (m/s), final_thickness_mean (m), final_thickness_nonuniformity (fraction), zone_pressures (Pa), ...}], target, units.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, metavar="DIR", help="Write lot.json, lot.csv and the lot plot lot.png into DIR, and the checkpoint lot.checkpoint.json after every wafer.")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out DIR (an interrupted lot, even killed with -9): the same results as without the interruption. Refused if the checkpoint's inputs differ; without a checkpoint the lot starts.")
 def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clock, drift_prior, zone_weight, zone_feedback, seed, idle_time, qualification, worn_summits,
-                config_path, controller_path, assignments, as_json, out_dir, resume):
+                config_path, controller_path, refit_model, assignments, as_json, out_dir, resume):
     """Polish a lot of wafers of RECIPE.toml in sequence on one pad that warms, glazes and is conditioned.
 
     Each wafer's incoming thickness varies (reproducible with --seed); with --control ewma the
@@ -69,7 +70,7 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
                          qualification=qualification, worn_summits=worn_summits, weight=weight, drift_weight=drift_weight,
                          zone_weight=zone_weight, zone_feedback=zone_feedback, clock=clock, drift_prior=drift_prior,
                          checkpoint=None if out_dir is None else Path(out_dir) / NAME, resume=resume, pad_constants=pad_constants,
-                         model_pad_constants=model_constants)
+                         model_pad_constants=model_constants, refit_model=refit_model)
     if out_dir is not None:
         write_lot(result, out_dir)
     if as_json:

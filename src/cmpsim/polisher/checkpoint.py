@@ -106,11 +106,14 @@ class LotCheckpoint:
     solves: int = 0
     #: the controller's model of the pad's life (:func:`life_to_dict`; None without control)
     model_life: dict | None = None
+    #: the refitting controller's memory (:meth:`cmpsim.polisher.refit.RefitState.to_dict`; None without ``refit_model``)
+    refit: dict | None = None
 
     def to_json(self) -> str:
         return json.dumps({"format": FORMAT, "version": VERSION, "inputs": self.inputs, "next_wafer": self.next_wafer,
                            "setup": self.setup, "pad_state": self.pad_state, "estimator": self.estimator, "zones": self.zones,
-                           "records": self.records, "solves": self.solves, "model_life": self.model_life})
+                           "records": self.records, "solves": self.solves, "model_life": self.model_life,
+                           "refit": self.refit})
 
 
 def write_checkpoint(path, checkpoint: LotCheckpoint) -> None:
@@ -142,4 +145,4 @@ def read_checkpoint(path, inputs: dict) -> LotCheckpoint | None:
         raise CheckpointMismatch(f"--resume: the checkpoint {str(path)!r} belongs to a lot with other inputs ({detail}); "
                                  "run with the checkpoint's inputs, or remove it (or choose another --out) to start a new lot")
     return LotCheckpoint(saved, int(data["next_wafer"]), data["setup"], data["pad_state"], data["estimator"], data["zones"],
-                         list(data["records"]), int(data["solves"]), data.get("model_life"))
+                         list(data["records"]), int(data["solves"]), data.get("model_life"), data.get("refit"))

@@ -46,6 +46,7 @@ from .engine import PadState, idle, polish
 from .incoming import incoming_profiles
 from .pad import GlazingClock, PadLife, mean_factor, time_mean, wear_through
 from .recipe import RecipeError, load_recipe
+from .refit import History, RefitState, Seen, refit, refitted_model
 from .lotresult import LotResult, WaferRecord, lot_csv, write_lot
 from .zones import ZoneFeedback, ZoneState
 
@@ -105,6 +106,7 @@ def run_lot(
     model_pad_constants: dict | None = None,
     polish_times=None,
     polish_zone_pressures=None,
+    refit_model: bool = False,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -176,6 +178,11 @@ def run_lot(
         recipe's other steps and pressures as written. Needs ``control = "none"``.
     polish_zone_pressures : sequence of tuples, optional
         With ``polish_times``: each wafer's zone pressures (Pa) as logged, for every step.
+    refit_model : bool
+        With ``control = "ewma"`` on the glazing clock: after each wafer the controller refits its
+        model's wear coefficient k_w to the rates measured so far (when they identify it) and replays
+        its filter on the refitted clock (:mod:`cmpsim.polisher.refit`, eqs. C6-C8). Off: the model
+        keeps its constants.
     after_wafer : callable, optional
         Called with the wafer's :class:`WaferRecord` after each wafer (and its checkpoint).
     """
@@ -199,6 +206,9 @@ def run_lot(
     make_estimator("ewma", 1.0, weight, drift_weight, clock, 1.0, drift_prior)  # the weights and the clock checked before any solve
     if not 0 < zone_weight <= 1:
         raise ValueError(f"zone_weight (the EWMA weight of the profile) must be in (0, 1]; got {zone_weight!r}")
+    if refit_model and not (control == "ewma" and clock == "glazing"):
+        raise ValueError(f"refit_model refits the pad-life model of the glazing clock: it needs control 'ewma' with clock 'glazing'; "
+                         f"got control {control!r}, clock {clock!r}")
     if resume and checkpoint is None:
         raise ValueError("resume needs the checkpoint to resume from (cmpsim lot --resume needs --out DIR)")
     target = recipe.target.remaining
@@ -233,6 +243,8 @@ def run_lot(
         inputs["polish_times"] = repr(polish_times)
     if polish_zone_pressures is not None:
         inputs["polish_zone_pressures"] = repr(polish_zone_pressures)
+    if refit_model:
+        inputs["refit_model"] = True
 
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
         cooled = idle(result.pad_state, idle_time, base)
@@ -244,8 +256,14 @@ def run_lot(
         setup, pad_state, estimator, zones, feedback, solves, model_life = _set_up(
             recipe, wafers, controlled, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers, cache,
             weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior, model, idle_time)
+        refit_state = None
+        if refit_model:  # the controller's memory for its refits: the monitor wafers, the last one's rate its seed
+            rated = estimator.level if setup["qualification"] else None
+            monitors = tuple(Seen(tuple(d), None, rated if j == len(setup["monitor_durations"]) - 1 else None)
+                             for j, d in enumerate(setup["monitor_durations"]))
+            refit_state = RefitState.begin(model, base, estimator.level, monitors)
         saved = LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones), [], solves,
-                              life_to_dict(model_life))
+                              life_to_dict(model_life), _dict(refit_state))
         if checkpoint is not None:
             write_checkpoint(checkpoint, saved)
     # the lot always goes on from the checkpoint's numbers, resumed or not, so that both run the same
@@ -253,6 +271,10 @@ def run_lot(
     setup, start, solves = saved.setup, saved.next_wafer, saved.solves
     pad_state, estimator, zones = _restore(saved)
     model_life = life_from_dict(saved.model_life)
+    refit_state = None if saved.refit is None else RefitState.from_dict(saved.refit)
+    history = History()  # the refit's samples of the controller's model, walked as the wafers come (in memory only)
+    if refit_state is not None and refit_state.moved:
+        model = refitted_model(model, refit_state)
     feedback = None if setup["feedback"] is None else _feedback_from_dict(setup["feedback"])
     records = [WaferRecord.from_dict(r) for r in saved.records]
 
@@ -314,8 +336,17 @@ def run_lot(
             estimator = estimator.update(removed / total_time / factor, age)
             if feedback is not None:
                 zones = feedback.learn(zones, pressures, (inc - final) / total_time)
+        if refit_state is not None:  # C6-C8: the controller refits its model's k_w to the rates it measured
+            seen = Seen(tuple(float(r.duration) for r in result.steps), ov.get("zone_pressures"),
+                        removed / total_time / factor if total_time > 0 else None)
+            before = (refit_state.wear_coefficient, refit_state.critical_glazed_area)
+            refit_state = refit(refit_state.seen(seen), model, recipe, overrides, time_step, idle_time, history)
+            if (refit_state.wear_coefficient, refit_state.critical_glazed_area) != before:
+                model, estimator, model_life = _refitted(refit_state, history, model, control, weight, drift_weight, clock, drift_prior)
+            record = records[-1] = replace(record, model_wear_coefficient=refit_state.wear_coefficient,
+                                           model_critical_glazed_area=refit_state.critical_glazed_area)
         saved = LotCheckpoint(inputs, k + 1, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones),
-                              [r.to_record() for r in records], solves, life_to_dict(model_life))
+                              [r.to_record() for r in records], solves, life_to_dict(model_life), _dict(refit_state))
         if checkpoint is not None:
             write_checkpoint(checkpoint, saved)
         pad_state, estimator, zones = _restore(saved)
@@ -324,7 +355,8 @@ def run_lot(
     return LotResult(recipe, records, control, conditioning, seed, None if target is None else float(target), float(idle_time), solves,
                      _time.perf_counter() - t0, setup["qualification"],
                      {"weight": float(weight), "drift_weight": float(drift_weight), "zone_weight": float(zone_weight), "clock": clock,
-                      "estimator": estimator.name, "zone_feedback": bool(feedback is not None)} if controlled else None)
+                      "estimator": estimator.name, "zone_feedback": bool(feedback is not None), "refit_model": bool(refit_model)}
+                     if controlled else None)
 
 
 def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, index, life, life_model, time_step):
@@ -363,6 +395,19 @@ def _model_through(model: PadLife, recipe, overrides, result, life, time_step: f
     done = [(recipe.step_config(s, overrides), r.duration) for s, r in zip(recipe.steps, result.steps)]
     age, life = wear_through(model, done, life, time_step)
     return age, model.idle(life, idle_time)
+
+
+def _refitted(state: RefitState, history: History, model: PadLife, control, weight, drift_weight, clock, drift_prior):
+    """C8: the controller's model with the refitted constants, its filter replayed from the seed over the
+    rates measured at the pad ages the refitted model gives the wafers, and its state now."""
+    scale = state.wear_coefficient / state.start
+    ages = history.ages(scale, state.critical_glazed_area)
+    seed_age = float(ages[state.monitors - 1]) if state.monitors else 1.0  # a fresh pad's factor without monitor wafers
+    estimator = make_estimator(control, state.seed_rate, weight, drift_weight, clock, seed_age, drift_prior)
+    for w, age in list(zip(state.wafers, ages))[state.monitors:]:
+        if w.rate is not None:
+            estimator = estimator.update(w.rate, float(age))
+    return refitted_model(model, state), estimator, history.state(scale)
 
 
 def _with_step_time(recipe, step_k: int, t: float):
@@ -404,10 +449,12 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
     controller's ``model`` of the pad's life through the monitor wafers (its state after them)."""
     pad_state = PadState(life=PadLifeState())
     model_life, model_age = PadLifeState(), 1.0
+    monitors = []  # each monitor wafer's step durations (s)
     if qualification:
         solves = 0
         for _ in range(qualification):
             first = polish(recipe, overrides=overrides, time_step=time_step, pad_state=pad_state, pad_life=life_model, cache=cache)
+            monitors.append([float(s.duration) for s in first.steps])
             solves += first.solves
             pad_state = between_wafers(first)
             model_age, model_life = _model_through(model, recipe, overrides, first, model_life, time_step, idle_time)
@@ -455,7 +502,8 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
             measured = (np.asarray(first.initial.thickness[0], dtype=float) - np.asarray(first.final.thickness[0], dtype=float)) / first_time
             zones = ZoneState(feedback.start_pressures, measured / float(weights @ measured))  # the first shape: the monitor wafer's
     setup = {"radius": radius.tolist(), "weights": weights.tolist(), "profiles": profiles.tolist(), "qualification": qualified,
-             "start_pressures": [float(p) for p in start_pressures], "feedback": None if feedback is None else _feedback_to_dict(feedback)}
+             "start_pressures": [float(p) for p in start_pressures], "feedback": None if feedback is None else _feedback_to_dict(feedback),
+             "monitor_durations": monitors}
     return setup, pad_state, estimator, zones, feedback, solves, (model_life if controlled else None)
 
 

@@ -17,6 +17,8 @@ UNITS = {
     "qualification.removal_rate_mean": "m/s", "qualification.polish_time": "s", "predicted_rate": "m/s",
     "predicted_nonuniformity": "1 (std over mean, wafer area, predicted by the zone feedback)",
     "controller.weight": "1", "controller.drift_weight": "1", "controller.zone_weight": "1",
+    "model_wear_coefficient": "1/Pa (the controller's pad-life model, refitted)",
+    "model_critical_glazed_area": "1 (the controller's pad-life model, refitted)",
 }
 
 
@@ -44,6 +46,10 @@ class WaferRecord:
     predicted_nonuniformity: float | None = None
     #: the zone feedback's decision for the wafer (eq. Z4): "accepted", "halved N", "refused"; None without it
     zone_step: str | None = None
+    #: 1/Pa: the wear coefficient k_w of the controller's pad-life model after the wafer (``refit_model``, eqs. C6-C7); None without it
+    model_wear_coefficient: float | None = None
+    #: 1: the critical glazed area G_c of the controller's pad-life model after the wafer (``refit_model``); None without it
+    model_critical_glazed_area: float | None = None
 
     def to_record(self) -> dict:
         """Every field as JSON-able values (the checkpoint's record; floats round-trip exactly)."""
@@ -74,6 +80,8 @@ class WaferRecord:
             "predicted_rate": self.predicted_rate,
             "predicted_nonuniformity": self.predicted_nonuniformity,
             "zone_step": self.zone_step,
+            "model_wear_coefficient": self.model_wear_coefficient,
+            "model_critical_glazed_area": self.model_critical_glazed_area,
         }
 
 

@@ -42,7 +42,7 @@ from ..physics.padlife import (
     summit_constants,
 )
 
-__all__ = ["PadLife", "StepWear", "fresh_pad", "worn_overrides", "sliding_speed"]
+__all__ = ["PadLife", "StepWear", "fresh_pad", "worn_overrides", "sliding_speed", "wear_through", "wear_samples"]
 
 
 def fresh_pad(config: Config) -> FreshPad:
@@ -160,20 +160,29 @@ def wear_through(pad_life: PadLife, steps, life: PadLifeState, time_step: float)
     """(:func:`mean_factor` of ``steps`` [(config, duration s), ...], the pad-life state after them): a
     wafer's steps as the recipe engine runs them (time steps of ``time_step`` s, the last one shorter),
     from ``life``. The lot's controller follows its own model of the pad with it (docs/polisher.md, C5)."""
-    times, factors, clock = [], [], 0.0
-    for config, duration in steps:
-        wear = pad_life.at(config)
+    times, factors = [], []
+    for clock, wear, life in wear_samples(pad_life, steps, life, time_step):
         times.append(clock)
         factors.append(wear.factor(life))
+    return time_mean(times, factors), life
+
+
+def wear_samples(pad_life: PadLife, steps, life: PadLifeState, time_step: float):
+    """The pad-life states a wafer's ``steps`` [(config, duration s), ...] pass through, as the recipe
+    engine samples them: (time from the wafer's start s, the step's :class:`StepWear`, the state) at
+    each step's start and at the end of each of its time steps (``time_step`` s, the last one shorter).
+    The last state yielded is the pad after the wafer (``life`` itself for a wafer of no steps)."""
+    clock = 0.0
+    for config, duration in steps:
+        wear = pad_life.at(config)
+        yield clock, wear, life
         elapsed = 0.0
         while elapsed < duration * (1 - 1e-12):
             dt = min(time_step, duration - elapsed)
             life = wear.advance(life, dt)
             elapsed += dt
             clock += dt
-            times.append(clock)
-            factors.append(wear.factor(life))
-    return time_mean(times, factors), life
+            yield clock, wear, life
 
 
 def time_mean(times, values) -> float:
