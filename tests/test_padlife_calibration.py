@@ -243,6 +243,71 @@ def test_logged_times_are_all_or_none_and_one_per_wafer(tmp_path):
             rows(f"lot,removal,250,nm,1,{bad}\n")
 
 
+def test_a_wafer_id_in_the_wafer_column_is_refused_before_any_solve(tmp_path):
+    """A fab's wafer ID or slot (2301) read as a place in the lot would run 2301 recipe solves: refused naming
+    the file, the row, the column, the valid range and what the column means."""
+    from cmpsim.calibration.lotdata import MAX_LOT_WAFERS, LotDataError, read_lot_rows
+
+    f = tmp_path / "ids.csv"
+    head = "dataset,quantity,value,unit,wafer\n"
+    f.write_text(head + "lot,removal,250,nm,2300\nlot,removal,240,nm,2301\n")
+    with pytest.raises(LotDataError) as exc:
+        read_lot_rows(f, f.read_text())
+    msg = str(exc.value)
+    assert msg.startswith(f"{f}:2: column 'wafer': '2300' is outside 1 to {MAX_LOT_WAFERS}") and "not a wafer ID or a slot" in msg, msg
+    assert "counted from the first wafer on the pad" in msg
+    f.write_text(head + f"lot,removal,250,nm,{MAX_LOT_WAFERS}\n")  # the bound itself is a place in the lot
+    assert read_lot_rows(f, f.read_text())[0].wafer == MAX_LOT_WAFERS
+    (tmp_path / "ids2.csv").write_text(head + f"lot,removal,250,nm,{MAX_LOT_WAFERS + 1}\n")
+    res = CliRunner().invoke(main, ["validate", str(tmp_path / "ids2.csv"), "--recipe", str(RECIPE), "--out", str(tmp_path / "v")])
+    assert res.exit_code == 2 and "ids2.csv:2: row 1, column 'wafer'" in " ".join(res.output.split()), res.output
+
+
+def test_a_wafers_quantity_given_twice_is_refused_naming_both_rows(tmp_path):
+    """Two rows of one wafer's removal (two lots pasted into one file, or a repeat) would be fitted as one lot's
+    wafer measured twice: refused, equal or not, in one file and across the files given together."""
+    from cmpsim.calibration.lotdata import LotDataError, read_lot_rows
+    from cmpsim.calibration.mixed import read_all
+
+    def rows(text, name="lot.csv"):
+        f = tmp_path / name
+        f.write_text("dataset,quantity,value,unit,wafer,film\n" + text)
+        return f
+
+    f = rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\nlot,removal,251,nm,1,\n")
+    with pytest.raises(LotDataError, match=r"lot.csv:4: column 'wafer': wafer 1's removal is 251 nm here and 250 nm in line 2: "):
+        read_lot_rows(f, f.read_text())
+    f = rows("lot,removal,250,nm,1,\nlot,removal,250,nm,1,\n")
+    with pytest.raises(LotDataError, match=r"lot.csv:3: .*wafer 1's removal is given twice \(also in line 2, the same value\)"):
+        read_lot_rows(f, f.read_text())
+    f = rows("lot,removal,250,nm,1,\nlot,removal,250,nm,1,oxide\n")  # a lot measures the top film: named or not, the same quantity
+    with pytest.raises(LotDataError, match=r"given twice .*films not given and oxide"):
+        read_lot_rows(f, f.read_text())
+    # a thickness and a removal of one wafer are two quantities
+    assert len(read_lot_rows(*(lambda g: (g, g.read_text()))(rows("lot,removal,250,nm,1,\nlot,thickness,240,nm,1,\n")))) == 2
+    a = rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\n", "a.csv")
+    b = rows("lot,removal,260,nm,3,\nlot,removal,230,nm,2,\n", "b.csv")
+    with pytest.raises(ValueError, match=r"b.csv:3: row 2, column 'wafer': wafer 2's removal is 230 nm here and 240 nm in .*a.csv:3"):
+        read_all([a, b])
+
+
+def test_rows_out_of_wafer_order_are_each_compared_with_their_own_wafer(tmp_path):
+    """The rows may come in any order: each is compared with the wafer it names, and the logged times are
+    put in wafer order."""
+    from cmpsim.calibration.lotdata import logged_times, read_lot_rows
+
+    f = tmp_path / "lot.csv"
+    f.write_text("dataset,quantity,value,unit,uncertainty,wafer,time\nlot,removal,240,nm,1,3,62 s\nlot,removal,250,nm,1,1,60 s\n"
+                 "lot,removal,245,nm,1,2,61 s\n")
+    shuffled = read_lot_rows(f, f.read_text())
+    assert [r.wafer for r in shuffled] == [3, 1, 2] and logged_times(shuffled) == [60.0, 61.0, 62.0]
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    ordered = sorted(shuffled, key=lambda r: r.wafer)
+    model = predict_lot(ordered, None, setting)
+    assert len(set(model)) == 3  # three wafers, three removals: a mix-up would show
+    assert np.array_equal(predict_lot(shuffled, None, setting), model[[2, 0, 1]])
+
+
 def test_lot_rows_without_a_recipe_are_noted_and_a_recipe_without_lot_rows_is_refused(tmp_path):
     lot_csv = tmp_path / "lot.csv"
     lot_csv.write_text("dataset,quantity,value,unit,uncertainty,wafer\nlot,removal,250,nm,1,1\nlot,removal,240,nm,1,2\n")
