@@ -112,3 +112,19 @@ def test_refuses_to_calibrate_against_another_models_prediction():
     thakurta = [p for p in shipped_dataset_paths() if "thakurta" in p.name]
     with pytest.raises(CalibrationError, match="another model's predictions"):
         calibrate(thakurta, ["pad_modulus"], config=BASE)
+
+
+def test_one_test_says_which_columns_of_the_jacobian_are_zero():
+    """Every fit (wafer, die, pad, pad life) and the data's choice read "the data do not change with it" through
+    zero_columns: absolutely (1e-9 of the residuals' uncertainties per unit fit variable, which alone catches
+    a single free input's round-off column) or relative to the largest column above 1."""
+    from cmpsim.calibration.identify import ZERO_JACOBIAN, choose, zero_columns
+
+    J = np.array([[1.0, 1e-12, 0.0, np.nan], [2.0, -1e-12, 0.0, 1.0]])
+    assert zero_columns(J).tolist() == [False, True, True, False]  # a column the model gave no value for is not called zero
+    assert zero_columns(np.array([[3e-12], [4e-12]])).tolist() == [True]  # one input: there is no other column to compare with
+    big = np.array([[1e3, 0.5 * ZERO_JACOBIAN * 1e3], [0.0, 0.0]])
+    assert zero_columns(big).tolist() == [False, True]  # 1e-9 of what the other input does
+    assert zero_columns(np.array([[1.0, 2 * ZERO_JACOBIAN]])).tolist() == [False, False]
+    left = dict(choose(J[:, :3], ["a", "b", "c"], ["", "", ""], 2).left)
+    assert set(left) == {"b", "c"} and all("column of the Jacobian is zero" in w for w in left.values())

@@ -111,6 +111,24 @@ def test_a_conditioned_lot_recovers_the_conditioner_constant_and_reports_its_tie
     assert np.sqrt(np.mean(cal.residuals_after**2)) < 1.5 * NOISE
 
 
+def test_a_constant_the_lot_does_not_see_is_refused_by_name(tmp_path):
+    """A lot without conditioning does not change with the disk's constant: asked for, k_c would come back at its
+    start with an interval [0, inf]; it is refused naming it, as the die's and the wafer-scale fits refuse one,
+    and from the command line with exit status 2 and nothing written."""
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    shape = [LotRecord(w, "removal", 0.0, NOISE) for w in (1, 2, 3)]
+    records = [replace(r, value=float(v)) for r, v in zip(shape, predict_lot(shape, None, setting))]
+    with pytest.raises(ValueError, match=r"^free conditioner_rate_constant: this lot's rows do not change with it .*not identifiable"):
+        calibrate_padlife(records, setting, ["pad_wear_coefficient", "conditioner_rate_constant"])
+    lot_csv = tmp_path / "lot.csv"
+    lot_csv.write_text("dataset,quantity,value,unit,uncertainty,wafer\n" + "".join(f"lot,removal,{r.value * 1e9!r},nm,1,{r.wafer}\n" for r in records))
+    out = tmp_path / "cal.toml"
+    res = CliRunner().invoke(main, ["calibrate", str(lot_csv), "--recipe", str(RECIPE), "--lot-conditioning", "none", "--grid", "coarse",
+                                    "--free", "conditioner_rate_constant", "--quiet", "--out", str(out)])
+    assert res.exit_code == 2 and "free conditioner_rate_constant: this lot's rows do not change with it" in " ".join(res.output.split())
+    assert not out.exists()
+
+
 def test_calibrate_from_the_command_line_writes_the_pad_life_and_lot_and_validate_use_it(tmp_path):
     true = {"pad_wear_coefficient": 2 * default_constants()["pad_wear_coefficient"]}
     records, _ = _lot(true)

@@ -26,6 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..physics.padlife import GLAZING_CONSTANTS, check_constants, default_constants
+from .identify import refuse_flat
 from .scalefit import ScaleFit, fit_statistics
 
 __all__ = ["GLAZING_CONSTANTS", "LotSetting", "PadLifeCalibration", "default_constants", "check_constants", "predict_lot",
@@ -235,6 +236,8 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
         return (predict_lot(records, {**s0, **values_of(z)}, setting) - y) / u
 
     J = central_jacobian(resid, z, len(records), h=1e-3)
+    if choice_names is None:  # asked for, and the lot's rows do not change with it: its "fitted" value would be its start
+        refuse_flat(J, free, "this lot's rows", "the constants")
     vals = values_of(z)
     # the bounds read relative to the start (the constants are of order 1e-15 1/Pa: an absolute tolerance would call every value a bound)
     chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi, chosen_again, scale=x0)

@@ -8,6 +8,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .identify import zero_columns
+
 __all__ = ["ScaleFit", "log_intervals", "fit_statistics"]
 
 
@@ -69,9 +71,9 @@ def _covariance(J, chi2, dof, absolute, notes) -> np.ndarray:
 
 def _identifiability(free, J, se, corr, vals, lo, hi) -> list[str]:
     out = []
-    norm = np.linalg.norm(J, axis=0)
+    zero = zero_columns(J)
     for k, n in enumerate(free):
-        if norm[k] < 1e-9 * max(norm.max(), 1e-300):
+        if zero[k]:
             out.append(f"{n}: the data do not depend on it (its column of the Jacobian is zero)")
         elif not np.isfinite(se[k]) or se[k] > math.log(10.0):
             out.append(f"{n}: not determined by these data (standard error above a factor 10)")

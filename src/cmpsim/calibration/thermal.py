@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .identify import refuse_flat
 from .measurements import ThermalRecord
 from .scalefit import ScaleFit, fit_statistics
 from .uncertainty import central_jacobian
@@ -237,6 +238,7 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
     if not records:
         raise ValueError("no pad records (pad_temperature_rise, friction_coefficient) to calibrate on")
     base = config if config is not None else Config.preset("300mm").replace(grid="coarse")
+    asked = free is not None
     if free is None:
         free, reasons = choose_free(records)
     else:
@@ -266,6 +268,8 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
                         gtol=1e-14, max_nfev=max_nfev)
     z = fit.x
     J = central_jacobian(resid, z, len(records), h=1e-4)
+    if asked:  # asked for, and the pad rows do not change with it: its "fitted" value would be its start
+        refuse_flat(J, free, "these pad rows", "the constants")
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
     chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi)
     m1 = predict_thermal(records, {**s0, **vals}, base)
