@@ -62,6 +62,18 @@ def test_white_calibration_lands_the_measured_rise_and_friction(white):
     assert set(white.constants) == {"friction_coefficient", "pad_heat_transfer_coefficient"}
 
 
+def test_without_degrees_of_freedom_the_intervals_need_the_uncertainties(white):
+    """White's two rows fix both constants with no degree of freedom left: with their uncertainties the intervals are
+    (J^T J)^-1's (tested above); without, they are undefined (printed [-, -], with a note), not [0, inf]."""
+    from dataclasses import replace
+
+    assert white.dof == 0 and white.absolute_sigma
+    bare = calibrate_thermal([replace(r, uncertainty=None) for r in white.records], free=white.free)
+    assert bare.dof == 0 and not bare.absolute_sigma
+    assert all(math.isnan(v) for n in bare.free for v in bare.ci95[n])
+    assert any("no degrees of freedom left" in s for s in bare.identifiability) and "[-, -]" in bare.summary()
+
+
 def test_a_rise_alone_cannot_separate_friction_from_heat_removal():
     rise = [r for r in read_measurements(WHITE) if r.quantity == "pad_temperature_rise"]
     cal = calibrate_thermal(rise + rise, free=["friction_coefficient", "pad_heat_transfer_coefficient"])

@@ -129,6 +129,21 @@ def test_a_constant_the_lot_does_not_see_is_refused_by_name(tmp_path):
     assert not out.exists()
 
 
+def test_without_degrees_of_freedom_the_intervals_need_the_uncertainties():
+    """One wafer, one constant: with its uncertainty the covariance is (J^T J)^-1; without, no scatter is left to
+    scale it by, and the interval is undefined (printed [-, -], with a note), not [0, inf]."""
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    shape = [LotRecord(3, "removal", 0.0, NOISE)]
+    one = [replace(shape[0], value=float(predict_lot(shape, {"pad_wear_coefficient": 2 * default_constants()["pad_wear_coefficient"]},
+                                                     setting)[0]))]
+    given = calibrate_padlife(one, setting, ["pad_wear_coefficient"])
+    lo, hi = given.ci95["pad_wear_coefficient"]
+    assert given.dof == 0 and given.absolute_sigma and 0 < lo < given.values["pad_wear_coefficient"] < hi < math.inf
+    bare = calibrate_padlife([replace(one[0], uncertainty=None)], setting, ["pad_wear_coefficient"])
+    assert bare.dof == 0 and not bare.absolute_sigma and all(math.isnan(v) for v in bare.ci95["pad_wear_coefficient"])
+    assert any("no degrees of freedom left" in s for s in bare.identifiability) and "[-, -]" in bare.summary()
+
+
 def test_calibrate_from_the_command_line_writes_the_pad_life_and_lot_and_validate_use_it(tmp_path):
     true = {"pad_wear_coefficient": 2 * default_constants()["pad_wear_coefficient"]}
     records, _ = _lot(true)
@@ -302,7 +317,8 @@ def test_a_wafers_quantity_given_twice_is_refused_naming_both_rows(tmp_path):
     with pytest.raises(LotDataError, match=r"given twice .*films not given and oxide"):
         read_lot_rows(f, f.read_text())
     # a thickness and a removal of one wafer are two quantities
-    assert len(read_lot_rows(*(lambda g: (g, g.read_text()))(rows("lot,removal,250,nm,1,\nlot,thickness,240,nm,1,\n")))) == 2
+    f = rows("lot,removal,250,nm,1,\nlot,thickness,240,nm,1,\n")
+    assert len(read_lot_rows(f, f.read_text())) == 2
     a = rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\n", "a.csv")
     b = rows("lot,removal,260,nm,3,\nlot,removal,230,nm,2,\n", "b.csv")
     with pytest.raises(ValueError, match=r"b.csv:3: row 2, column 'wafer': wafer 2's removal is 230 nm here and 240 nm in .*a.csv:3"):

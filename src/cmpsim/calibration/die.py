@@ -41,7 +41,7 @@ import numpy as np
 
 from .identify import refuse_flat
 from .measurements import StructureRecord
-from .scalefit import ScaleFit, fit_statistics
+from .scalefit import ScaleFit, fit_statistics, interval_text
 from .uncertainty import central_jacobian
 
 __all__ = ["DIE_CONSTANTS", "ISOLATED_PITCH", "TestStructure", "DieCalibration", "predict_die", "calibrate_die",
@@ -363,8 +363,7 @@ class DieCalibration(ScaleFit):
         rows = []
         for n in self.free:
             u = DIE_CONSTANTS[n][0]
-            lo, hi = self.ci95[n]
-            rows.append([n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", u, self.reasons.get(n, "")])
+            rows.append([n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", interval_text(*self.ci95[n]), u, self.reasons.get(n, "")])
         out = [text_table(["constant", "start", "fitted", "95 % interval", "unit", "why free"], rows), ""]
         if len(self.free) > 1:
             out.append("correlation (of ln value):")

@@ -14,7 +14,7 @@ docs/polisher.md "Pad life") are fitted to them by bounded least squares in ln(v
 
 The glazing changes a wafer's rate, not its equilibrium, so one lot's solves serve every
 evaluation (a shared cache). Covariance (J^T J)^-1 at the optimum (scaled by the reduced
-chi-square without uncertainties), 95 % intervals in ln(value), correlations, and what the data
+chi-square without uncertainties, undefined without a scatter: :func:`cmpsim.calibration.uncertainty.covariance`), 95 % intervals in ln(value), correlations, and what the data
 cannot separate (:func:`cmpsim.calibration.identify.choose` before the fit, the correlations after).
 """
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from ..physics.padlife import GLAZING_CONSTANTS, check_constants, default_constants
 from .identify import refuse_flat
-from .scalefit import ScaleFit, fit_statistics
+from .scalefit import ScaleFit, fit_statistics, interval_text
 
 __all__ = ["GLAZING_CONSTANTS", "LotSetting", "PadLifeCalibration", "default_constants", "check_constants", "predict_lot",
            "choose_free", "start_jacobian", "calibrate_padlife", "padlife_constants"]
@@ -137,7 +137,7 @@ class PadLifeCalibration(ScaleFit):
     def summary(self) -> str:
         from ..tables import text_table
 
-        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", f"[{self.ci95[n][0]:.4g}, {self.ci95[n][1]:.4g}]",
+        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", interval_text(*self.ci95[n]),
                  GLAZING_CONSTANTS[n][0], self.reasons.get(n, "")] for n in self.free]
         out = [text_table(["constant", "start", "fitted", "95 % interval", "unit", "why free"], rows), ""]
         if len(self.free) > 1:

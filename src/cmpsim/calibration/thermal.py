@@ -33,7 +33,7 @@ import numpy as np
 
 from .identify import refuse_flat
 from .measurements import ThermalRecord
-from .scalefit import ScaleFit, fit_statistics
+from .scalefit import ScaleFit, fit_statistics, interval_text
 from .uncertainty import central_jacobian
 
 __all__ = ["THERMAL_CONSTANTS", "FrictionalPower", "frictional_power", "predict_thermal", "calibrate_thermal", "ThermalCalibration",
@@ -166,7 +166,7 @@ class ThermalCalibration(ScaleFit):
     def summary(self) -> str:
         from ..tables import text_table
 
-        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", f"[{self.ci95[n][0]:.4g}, {self.ci95[n][1]:.4g}]",
+        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", interval_text(*self.ci95[n]),
                  THERMAL_CONSTANTS[n][0], self.reasons.get(n, "")] for n in self.free]
         out = [text_table(["constant", "start", "fitted", "95 % interval", "unit", "why free"], rows), ""]
         if len(self.free) > 1:
