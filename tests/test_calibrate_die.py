@@ -124,6 +124,23 @@ def test_a_constant_the_data_do_not_see_is_refused_by_name():
         calibrate_die(recs, free=["contact_height", "summit_radius", "oxide_selectivity"])
 
 
+def test_without_degrees_of_freedom_the_intervals_need_the_uncertainties():
+    """Two structures, two constants: with their uncertainties the covariance is (J^T J)^-1; without, no scatter
+    is left to scale it by, and the intervals are undefined (printed [-, -], with a note), not [0, inf]."""
+    from dataclasses import replace
+
+    recs = _synthetic([0.5, 5])
+    given = calibrate_die(recs, free=["contact_height", "summit_radius"])
+    assert given.dof == 0 and given.absolute_sigma
+    for n in given.free:
+        lo, hi = given.ci95[n]
+        assert 0 < lo < given.values[n] < hi < math.inf
+    bare = calibrate_die([replace(r, uncertainty=None) for r in recs], free=["contact_height", "summit_radius"])
+    assert bare.dof == 0 and not bare.absolute_sigma
+    assert all(math.isnan(v) for n in bare.free for v in bare.ci95[n])
+    assert any("no degrees of freedom left" in s for s in bare.identifiability) and "[-, -]" in bare.summary()
+
+
 # ----------------------------------------------------------------------------- the shipped data, held out
 
 

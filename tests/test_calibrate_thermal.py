@@ -62,10 +62,43 @@ def test_white_calibration_lands_the_measured_rise_and_friction(white):
     assert set(white.constants) == {"friction_coefficient", "pad_heat_transfer_coefficient"}
 
 
+def test_without_degrees_of_freedom_the_intervals_need_the_uncertainties(white):
+    """White's two rows fix both constants with no degree of freedom left: with their uncertainties the intervals are
+    (J^T J)^-1's (tested above); without, they are undefined (printed [-, -], with a note), not [0, inf]."""
+    from dataclasses import replace
+
+    assert white.dof == 0 and white.absolute_sigma
+    bare = calibrate_thermal([replace(r, uncertainty=None) for r in white.records], free=white.free)
+    assert bare.dof == 0 and not bare.absolute_sigma
+    assert all(math.isnan(v) for n in bare.free for v in bare.ci95[n])
+    assert any("no degrees of freedom left" in s for s in bare.identifiability) and "[-, -]" in bare.summary()
+
+
 def test_a_rise_alone_cannot_separate_friction_from_heat_removal():
     rise = [r for r in read_measurements(WHITE) if r.quantity == "pad_temperature_rise"]
     cal = calibrate_thermal(rise + rise, free=["friction_coefficient", "pad_heat_transfer_coefficient"])
     assert any("cannot be separated" in s or "not determined" in s or "singular" in s.split(":")[0] for s in cal.identifiability), cal.identifiability
+
+
+def test_a_constant_the_pad_rows_do_not_see_is_refused_by_name(tmp_path):
+    """A friction does not change with the heat removal: asked for on friction rows alone, h_s would come back at
+    its start with an interval [0, inf]; it is refused naming it, as the die's and the wafer-scale fits refuse
+    one, and from the command line with exit status 2 and nothing written."""
+    from click.testing import CliRunner
+
+    from cmpsim.cli import main
+
+    fric = [r for r in read_measurements(WHITE) if r.quantity == "friction_coefficient"]
+    with pytest.raises(ValueError, match=r"^free pad_heat_transfer_coefficient: these pad rows do not change with it .*not identifiable"):
+        calibrate_thermal(fric, free=["friction_coefficient", "pad_heat_transfer_coefficient"])
+    assert calibrate_thermal(fric).free == ["friction_coefficient"]  # the data's own choice leaves it
+    f = tmp_path / "friction.csv"
+    f.write_text("".join(ln + "\n" for ln in WHITE.read_text().splitlines() if "pad_temperature_rise" not in ln))
+    out = tmp_path / "cal.toml"
+    res = CliRunner().invoke(main, ["calibrate", str(f), "--free", "friction_coefficient,pad_heat_transfer_coefficient", "--quiet",
+                                    "--out", str(out)])
+    assert res.exit_code == 2 and "free pad_heat_transfer_coefficient: these pad rows do not change with it" in " ".join(res.output.split())
+    assert not out.exists()
 
 
 def test_synthetic_trace_recovers_both_constants():

@@ -112,3 +112,52 @@ def test_refuses_to_calibrate_against_another_models_prediction():
     thakurta = [p for p in shipped_dataset_paths() if "thakurta" in p.name]
     with pytest.raises(CalibrationError, match="another model's predictions"):
         calibrate(thakurta, ["pad_modulus"], config=BASE)
+
+
+def test_one_test_says_which_columns_of_the_jacobian_are_zero():
+    """Every fit (wafer, die, pad, pad life) and the data's choice read "the data do not change with it" through
+    zero_columns: absolutely (1e-9 of the residuals' uncertainties per unit fit variable, which alone catches
+    a single free input's round-off column) or relative to the largest column above 1."""
+    from cmpsim.calibration.identify import ZERO_JACOBIAN, choose, zero_columns
+
+    J = np.array([[1.0, 1e-12, 0.0, np.nan], [2.0, -1e-12, 0.0, 1.0]])
+    assert zero_columns(J).tolist() == [False, True, True, False]  # a column the model gave no value for is not called zero
+    assert zero_columns(np.array([[3e-12], [4e-12]])).tolist() == [True]  # one input: there is no other column to compare with
+    big = np.array([[1e3, 0.5 * ZERO_JACOBIAN * 1e3], [0.0, 0.0]])
+    assert zero_columns(big).tolist() == [False, True]  # 1e-9 of what the other input does
+    assert zero_columns(np.array([[1.0, 2 * ZERO_JACOBIAN]])).tolist() == [False, False]
+    left = dict(choose(J[:, :3], ["a", "b", "c"], ["", "", ""], 2).left)
+    assert set(left) == {"b", "c"} and all("column of the Jacobian is zero" in w for w in left.values())
+
+
+def test_one_covariance_for_every_fit_undefined_without_a_scatter_to_scale_by():
+    """(J^T J)^-1 with absolute uncertainties whatever the degrees of freedom; without them scaled by the reduced
+    chi-square, and undefined (NaN, with a note) at no degree of freedom or an exact fit, not infinite or shrunk."""
+    from cmpsim.calibration.uncertainty import covariance
+
+    J = np.array([[1.0, 0.0], [0.0, 2.0], [1.0, 1.0]])
+    inv = np.linalg.inv(J.T @ J)
+    for dof in (0, 1):
+        notes = []
+        assert np.allclose(covariance(J, 3.0, dof, True, notes), inv) and notes == []
+    notes = []
+    assert np.isnan(covariance(J[:2], 0.0, 0, False, notes)).all() and "no degrees of freedom left" in notes[0]
+    notes = []
+    assert np.isnan(covariance(J, 1e-14, 1, False, notes)).all() and "fitted exactly" in notes[0]
+    assert np.allclose(covariance(J, 3.0, 1, False, []), 3.0 * inv)
+    notes = []
+    assert np.isinf(covariance(np.array([[1.0, 1.0], [2.0, 2.0]]), 3.0, 0, True, notes)).all() and "singular" in notes[0]
+
+
+def test_a_wafer_fit_without_degrees_of_freedom_gives_its_intervals_only_with_uncertainties(tmp_path):
+    path = synthetic_dataset(tmp_path / "one.csv", TRUTH, POINTS[:1], ["film_thickness"], config=BASE, relative_noise=0.01, seed=1)
+    given = calibrate(path, ["asperity_density"], config=BASE)
+    lo, hi = given.ci95["asperity_density"]
+    assert given.dof == 0 and given.absolute_sigma and 0 < lo < given.values["asperity_density"] < hi < np.inf
+    lines = path.read_text().splitlines()
+    at = lines[4].split(",").index("uncertainty")  # the header, after the four comment lines
+    bare = tmp_path / "bare.csv"
+    bare.write_text("\n".join(lines[:5] + [",".join("" if k == at else c for k, c in enumerate(ln.split(","))) for ln in lines[5:]]) + "\n")
+    none = calibrate(bare, ["asperity_density"], config=BASE)
+    assert none.dof == 0 and not none.absolute_sigma
+    assert all(np.isnan(none.ci95["asperity_density"])) and any("no degrees of freedom left" in n for n in none.notes)

@@ -111,6 +111,39 @@ def test_a_conditioned_lot_recovers_the_conditioner_constant_and_reports_its_tie
     assert np.sqrt(np.mean(cal.residuals_after**2)) < 1.5 * NOISE
 
 
+def test_a_constant_the_lot_does_not_see_is_refused_by_name(tmp_path):
+    """A lot without conditioning does not change with the disk's constant: asked for, k_c would come back at its
+    start with an interval [0, inf]; it is refused naming it, as the die's and the wafer-scale fits refuse one,
+    and from the command line with exit status 2 and nothing written."""
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    shape = [LotRecord(w, "removal", 0.0, NOISE) for w in (1, 2, 3)]
+    records = [replace(r, value=float(v)) for r, v in zip(shape, predict_lot(shape, None, setting))]
+    with pytest.raises(ValueError, match=r"^free conditioner_rate_constant: this lot's rows do not change with it .*not identifiable"):
+        calibrate_padlife(records, setting, ["pad_wear_coefficient", "conditioner_rate_constant"])
+    lot_csv = tmp_path / "lot.csv"
+    lot_csv.write_text("dataset,quantity,value,unit,uncertainty,wafer\n" + "".join(f"lot,removal,{r.value * 1e9!r},nm,1,{r.wafer}\n" for r in records))
+    out = tmp_path / "cal.toml"
+    res = CliRunner().invoke(main, ["calibrate", str(lot_csv), "--recipe", str(RECIPE), "--lot-conditioning", "none", "--grid", "coarse",
+                                    "--free", "conditioner_rate_constant", "--quiet", "--out", str(out)])
+    assert res.exit_code == 2 and "free conditioner_rate_constant: this lot's rows do not change with it" in " ".join(res.output.split())
+    assert not out.exists()
+
+
+def test_without_degrees_of_freedom_the_intervals_need_the_uncertainties():
+    """One wafer, one constant: with its uncertainty the covariance is (J^T J)^-1; without, no scatter is left to
+    scale it by, and the interval is undefined (printed [-, -], with a note), not [0, inf]."""
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    shape = [LotRecord(3, "removal", 0.0, NOISE)]
+    one = [replace(shape[0], value=float(predict_lot(shape, {"pad_wear_coefficient": 2 * default_constants()["pad_wear_coefficient"]},
+                                                     setting)[0]))]
+    given = calibrate_padlife(one, setting, ["pad_wear_coefficient"])
+    lo, hi = given.ci95["pad_wear_coefficient"]
+    assert given.dof == 0 and given.absolute_sigma and 0 < lo < given.values["pad_wear_coefficient"] < hi < math.inf
+    bare = calibrate_padlife([replace(one[0], uncertainty=None)], setting, ["pad_wear_coefficient"])
+    assert bare.dof == 0 and not bare.absolute_sigma and all(math.isnan(v) for v in bare.ci95["pad_wear_coefficient"])
+    assert any("no degrees of freedom left" in s for s in bare.identifiability) and "[-, -]" in bare.summary()
+
+
 def test_calibrate_from_the_command_line_writes_the_pad_life_and_lot_and_validate_use_it(tmp_path):
     true = {"pad_wear_coefficient": 2 * default_constants()["pad_wear_coefficient"]}
     records, _ = _lot(true)
@@ -241,6 +274,72 @@ def test_logged_times_are_all_or_none_and_one_per_wafer(tmp_path):
     for bad in ("-5 s", "60 nm", "abc"):
         with pytest.raises(LotDataError, match=r"lot.csv:2: .*time"):
             rows(f"lot,removal,250,nm,1,{bad}\n")
+
+
+def test_a_wafer_id_in_the_wafer_column_is_refused_before_any_solve(tmp_path):
+    """A fab's wafer ID or slot (2301) read as a place in the lot would run 2301 recipe solves: refused naming
+    the file, the row, the column, the valid range and what the column means."""
+    from cmpsim.calibration.lotdata import MAX_LOT_WAFERS, LotDataError, read_lot_rows
+
+    f = tmp_path / "ids.csv"
+    head = "dataset,quantity,value,unit,wafer\n"
+    f.write_text(head + "lot,removal,250,nm,2300\nlot,removal,240,nm,2301\n")
+    with pytest.raises(LotDataError) as exc:
+        read_lot_rows(f, f.read_text())
+    msg = str(exc.value)
+    assert msg.startswith(f"{f}:2: column 'wafer': '2300' is outside 1 to {MAX_LOT_WAFERS}") and "not a wafer ID or a slot" in msg, msg
+    assert "counted from the first wafer on the pad" in msg
+    f.write_text(head + f"lot,removal,250,nm,{MAX_LOT_WAFERS}\n")  # the bound itself is a place in the lot
+    assert read_lot_rows(f, f.read_text())[0].wafer == MAX_LOT_WAFERS
+    (tmp_path / "ids2.csv").write_text(head + f"lot,removal,250,nm,{MAX_LOT_WAFERS + 1}\n")
+    res = CliRunner().invoke(main, ["validate", str(tmp_path / "ids2.csv"), "--recipe", str(RECIPE), "--out", str(tmp_path / "v")])
+    assert res.exit_code == 2 and "ids2.csv:2: row 1, column 'wafer'" in " ".join(res.output.split()), res.output
+
+
+def test_a_wafers_quantity_given_twice_is_refused_naming_both_rows(tmp_path):
+    """Two rows of one wafer's removal (two lots pasted into one file, or a repeat) would be fitted as one lot's
+    wafer measured twice: refused, equal or not, in one file and across the files given together."""
+    from cmpsim.calibration.lotdata import LotDataError, read_lot_rows
+    from cmpsim.calibration.mixed import read_all
+
+    def rows(text, name="lot.csv"):
+        f = tmp_path / name
+        f.write_text("dataset,quantity,value,unit,wafer,film\n" + text)
+        return f
+
+    f = rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\nlot,removal,251,nm,1,\n")
+    with pytest.raises(LotDataError, match=r"lot.csv:4: column 'wafer': wafer 1's removal is 251 nm here and 250 nm in line 2: "):
+        read_lot_rows(f, f.read_text())
+    f = rows("lot,removal,250,nm,1,\nlot,removal,250,nm,1,\n")
+    with pytest.raises(LotDataError, match=r"lot.csv:3: .*wafer 1's removal is given twice \(also in line 2, the same value\)"):
+        read_lot_rows(f, f.read_text())
+    f = rows("lot,removal,250,nm,1,\nlot,removal,250,nm,1,oxide\n")  # a lot measures the top film: named or not, the same quantity
+    with pytest.raises(LotDataError, match=r"given twice .*films not given and oxide"):
+        read_lot_rows(f, f.read_text())
+    # a thickness and a removal of one wafer are two quantities
+    f = rows("lot,removal,250,nm,1,\nlot,thickness,240,nm,1,\n")
+    assert len(read_lot_rows(f, f.read_text())) == 2
+    a = rows("lot,removal,250,nm,1,\nlot,removal,240,nm,2,\n", "a.csv")
+    b = rows("lot,removal,260,nm,3,\nlot,removal,230,nm,2,\n", "b.csv")
+    with pytest.raises(ValueError, match=r"b.csv:3: row 2, column 'wafer': wafer 2's removal is 230 nm here and 240 nm in .*a.csv:3"):
+        read_all([a, b])
+
+
+def test_rows_out_of_wafer_order_are_each_compared_with_their_own_wafer(tmp_path):
+    """The rows may come in any order: each is compared with the wafer it names, and the logged times are
+    put in wafer order."""
+    from cmpsim.calibration.lotdata import logged_times, read_lot_rows
+
+    f = tmp_path / "lot.csv"
+    f.write_text("dataset,quantity,value,unit,uncertainty,wafer,time\nlot,removal,240,nm,1,3,62 s\nlot,removal,250,nm,1,1,60 s\n"
+                 "lot,removal,245,nm,1,2,61 s\n")
+    shuffled = read_lot_rows(f, f.read_text())
+    assert [r.wafer for r in shuffled] == [3, 1, 2] and logged_times(shuffled) == [60.0, 61.0, 62.0]
+    setting = LotSetting(RECIPE, conditioning="none", seed=0, overrides=dict(COARSE))
+    ordered = sorted(shuffled, key=lambda r: r.wafer)
+    model = predict_lot(ordered, None, setting)
+    assert len(set(model)) == 3  # three wafers, three removals: a mix-up would show
+    assert np.array_equal(predict_lot(shuffled, None, setting), model[[2, 0, 1]])
 
 
 def test_lot_rows_without_a_recipe_are_noted_and_a_recipe_without_lot_rows_is_refused(tmp_path):

@@ -34,7 +34,7 @@ from ..inputs.config import Config
 from ..validation import _as_datasets
 from ..inputs.config import PARAMETERS
 from .heldout import series_loo
-from .identify import choose, separability
+from .identify import ZERO_JACOBIAN, choose, refuse_flat, separability  # noqa: F401 - ZERO_JACOBIAN: kept where it was
 from .registry import candidates
 from .request import (CALIBRATABLE, CalibrationError, check_data, default_bounds, fit_bounds, fit_scale_of, fitted_in_log, free_names, inside,
                       required_settings, start_config)
@@ -51,11 +51,6 @@ def __getattr__(name: str):
 
         return synthetic_dataset
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
-#: Norm of a Jacobian column (whitened residuals per unit fit variable, dimensionless) at or below which the data
-#: do not depend on a free input at all (an exact zero in practice: e.g. the edge exclusion for wafer-mean rates).
-ZERO_JACOBIAN = 1e-9
 
 
 def calibrate(
@@ -177,11 +172,8 @@ def calibrate(
     problem.callback = None
     # after: uncertainty at the optimum, then the model there
     J = central_jacobian(problem, z, n_pts, lower=lower, upper=upper)
-    flat = [n for k, n in enumerate(free) if np.all(np.isfinite(J[:, k])) and np.linalg.norm(J[:, k]) <= ZERO_JACOBIAN]
-    if flat:  # the optimiser moved it for nothing: its "fitted" value would be arbitrary
-        raise CalibrationError(f"--free {', '.join(flat)}: the model's values at these data do not change with "
-                               f"{'it' if len(flat) == 1 else 'them'} (column of the Jacobian zero at the fit): not identifiable from these data, "
-                               "nothing fitted; free inputs the data depend on (without --free the data choose them)")
+    # the optimiser moved an input the data do not depend on for nothing: its "fitted" value would be arbitrary
+    refuse_flat(J, free, "the model's values at these data", "inputs", "--free", CalibrationError)
     m1, res1, st1 = problem.model(z)
     r1 = problem.whiten(m1)
     chi2 = float(np.sum(r1 * r1))

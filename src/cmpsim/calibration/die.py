@@ -39,8 +39,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .identify import refuse_flat
 from .measurements import StructureRecord
-from .scalefit import ScaleFit, fit_statistics
+from .scalefit import ScaleFit, fit_statistics, interval_text
 from .uncertainty import central_jacobian
 
 __all__ = ["DIE_CONSTANTS", "ISOLATED_PITCH", "TestStructure", "DieCalibration", "predict_die", "calibrate_die",
@@ -362,8 +363,7 @@ class DieCalibration(ScaleFit):
         rows = []
         for n in self.free:
             u = DIE_CONSTANTS[n][0]
-            lo, hi = self.ci95[n]
-            rows.append([n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", u, self.reasons.get(n, "")])
+            rows.append([n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", interval_text(*self.ci95[n]), u, self.reasons.get(n, "")])
         out = [text_table(["constant", "start", "fitted", "95 % interval", "unit", "why free"], rows), ""]
         if len(self.free) > 1:
             out.append("correlation (of ln value):")
@@ -474,12 +474,8 @@ def calibrate_die(records, config=None, free=None, *, start: dict | None = None,
                         ftol=1e-10, xtol=1e-10, gtol=1e-12, max_nfev=max_nfev)
     z = fit.x
     J = central_jacobian(resid, z, len(records), h=1e-3)
-    norm = np.linalg.norm(J, axis=0)
-    flat = [n for k, n in enumerate(free) if not norm[k] > 1e-9 * max(norm.max(), 1e-300)]
-    if flat and not auto:  # asked for, and the structures do not change with it: its "fitted" value would be its start
-        raise ValueError(f"free {', '.join(flat)}: these test structures do not change with {'it' if len(flat) == 1 else 'them'} "
-                         "(column of the Jacobian zero at the fit): not identifiable from these data, nothing fitted; free the "
-                         "constants the structures depend on (without free the data choose them)")
+    if not auto:  # asked for, and the structures do not change with it: its "fitted" value would be its start
+        refuse_flat(J, free, "these test structures", "the constants")
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
     chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi)
     if auto:

@@ -4,7 +4,9 @@
 the data see (a column of the Jacobian of the whitened residuals that the columns kept before
 do not span) and one degree of freedom is left; :func:`separability` says after a fit which
 inputs the data cannot tell apart (|correlation| >= :data:`CORRELATION_LIMIT`) and gives the
-singular values of the scaled Jacobian.
+singular values of the scaled Jacobian. :func:`zero_columns` is the one test of "the data do not
+change with this input" of every fit (:data:`ZERO_JACOBIAN`), and :func:`refuse_flat` refuses an
+input asked for whose column is zero at the fit.
 """
 
 from __future__ import annotations
@@ -13,13 +15,40 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Choice", "choose", "separability", "CORRELATION_LIMIT", "SEPARATION_LIMIT"]
+__all__ = ["Choice", "choose", "separability", "zero_columns", "refuse_flat", "CORRELATION_LIMIT", "SEPARATION_LIMIT", "ZERO_JACOBIAN"]
 
 #: |correlation| of two fitted inputs at or above which the data cannot separate them.
 CORRELATION_LIMIT = 0.99
 #: Part of a candidate's Jacobian column outside the span of the columns kept (relative norm)
 #: below which it cannot be separated from them: sin(angle) 0.1, i.e. a correlation of 0.995.
 SEPARATION_LIMIT = 0.1
+#: Norm of a Jacobian column (whitened residuals per unit fit variable, dimensionless) at or below which the data
+#: do not depend on a free input at all: absolutely (a unit change of the input's fit variable moves the residuals
+#: by 1e-9 of their uncertainties), or relative to the largest column when that is above 1 (1e-9 of what another
+#: input does). An exact zero in practice: e.g. the edge exclusion for wafer-mean rates.
+ZERO_JACOBIAN = 1e-9
+
+
+def zero_columns(J: np.ndarray) -> np.ndarray:
+    """Which columns of ``J`` (whitened residuals x fit variables) are zero, one bool per column: finite, with
+    a norm at most :data:`ZERO_JACOBIAN` times the largest finite column's norm or 1, whichever is larger.
+    A column with a non-finite entry is not called zero (the model had no value there; said elsewhere)."""
+    J = np.asarray(J, dtype=float)
+    finite = np.all(np.isfinite(J), axis=0)
+    norms = np.linalg.norm(np.where(np.isfinite(J), J, 0.0), axis=0)
+    largest = float(norms[finite].max()) if finite.any() else 0.0
+    return finite & (norms <= ZERO_JACOBIAN * max(largest, 1.0))
+
+
+def refuse_flat(J: np.ndarray, names, data: str, kind: str, option: str = "free", error=ValueError) -> None:
+    """Raise ``error`` naming the inputs ``names`` (asked for with ``option``) whose columns of the Jacobian at the
+    fit ``J`` are zero (:func:`zero_columns`): their "fitted" values would be their starts, or wherever the
+    optimiser left them. ``data``: what the data are ("these test structures"); ``kind``: what to free instead."""
+    flat = [n for n, z in zip(names, zero_columns(J)) if z]
+    if flat:
+        raise error(f"{option} {', '.join(flat)}: {data} do not change with {'it' if len(flat) == 1 else 'them'} (column of the Jacobian "
+                    f"zero at the fit): not identifiable from these data, nothing fitted; free {kind} the data depend on (without "
+                    f"{option} the data choose them)")
 
 
 @dataclass
@@ -45,12 +74,12 @@ def choose(J: np.ndarray, names: list[str], whys: list[str], max_free: int) -> C
     in order of preference) that the data can separate, at most ``max_free`` of them."""
     J = np.asarray(J, dtype=float)
     norms = np.linalg.norm(J, axis=0)
-    scale = float(norms.max()) if norms.size and np.isfinite(norms).all() else 0.0
+    zero = zero_columns(J)
     out = Choice()
     kept: list[int] = []
     for k, (name, why) in enumerate(zip(names, whys)):
         col = J[:, k]
-        if not np.all(np.isfinite(col)) or norms[k] <= 1e-9 * max(scale, 1e-300):
+        if not np.all(np.isfinite(col)) or zero[k]:
             out.left.append((name, "the data do not change with it (its column of the Jacobian is zero): not identifiable from these data"))
             continue
         if kept:
@@ -101,8 +130,8 @@ def separability(J: np.ndarray, names: list[str], correlation: np.ndarray | None
     if not msgs and len(names) > 1 and sv[-1] < 1e-6 * sv[0]:
         msgs.append(f"{', '.join(names)}: the Jacobian is singular (smallest singular value {sv[-1]:.2g} of {sv[0]:.2g}): "
                     "the data cannot separate them; fix one")
-    for k, n in enumerate(names):
-        if norms[k] == 0:
+    for n, zero in zip(names, zero_columns(J)):
+        if zero:
             msgs.append(f"{n} is not identifiable: the data do not change with it")
     return msgs, sv
 

@@ -5,7 +5,7 @@ A fab keeps the post-polish metrology of every wafer of a lot. In the CSV format
 
 | column | required | meaning |
 |---|---|---|
-| ``wafer`` | yes | the wafer's place in the lot, 1, 2, ... (an integer) |
+| ``wafer`` | yes | the wafer's place in the lot, 1, 2, ... (an integer, at most :data:`MAX_LOT_WAFERS`): counted from the first wafer on the pad, not a wafer ID or a slot |
 | ``quantity`` | yes | ``thickness`` (wafer-mean film left after the recipe) or ``removal`` (wafer-mean depth removed) |
 | ``value``, ``unit`` | yes | a length with its unit (``nm``, ``angstrom``, ``um``) |
 | ``uncertainty`` | no | one standard uncertainty, in ``unit`` |
@@ -16,6 +16,8 @@ A fab keeps the post-polish metrology of every wafer of a lot. In the CSV format
 
 :func:`read_lot_rows` reads them (SI) and refuses a bad row naming its line and column;
 ``cmpsim validate LOT.csv --recipe RECIPE.toml`` compares them with ``cmpsim lot`` of that recipe.
+The rows may come in any order (each is compared with the wafer it names); a wafer's quantity is
+given once (:func:`check_once`: a second row of it, equal or not, is refused naming both).
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "read_lot_rows", "logged_times", "logged_zone_pressures"]
+__all__ = ["LotRecord", "LOT_QUANTITIES", "LOT_COLUMNS", "MAX_LOT_WAFERS", "read_lot_rows", "check_once", "logged_times",
+           "logged_zone_pressures"]
 
 #: Per-wafer quantities of a lot: name -> meaning (both lengths, m).
 LOT_QUANTITIES = {
@@ -34,6 +37,12 @@ LOT_QUANTITIES = {
 }
 #: The columns a lot row may fill.
 LOT_COLUMNS = ("dataset", "quantity", "value", "unit", "uncertainty", "wafer", "film", "time", "zone_pressures", "source", "label", "note")
+#: The last ``wafer`` a lot row may name. A lot is compared by running every wafer up to the last named,
+#: each a full recipe solve, so a wafer ID or a slot number (2301) in the column would start hours of
+#: solves. The bound is an assumption, not a measurement of this project: a pad is replaced after of
+#: order 500-1500 wafers (fab practice as commonly quoted), so a place on one pad beyond 1000 is far
+#: more likely an ID than a place; a pad that really lasts longer cannot be compared past it here.
+MAX_LOT_WAFERS = 1000
 
 
 class LotDataError(ValueError):
@@ -112,6 +121,10 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
             raise LotDataError(f"{where}: column 'wafer': {w!r} is not a wafer number (an integer >= 1)") from None
         if wafer < 1:
             raise LotDataError(f"{where}: column 'wafer': {w!r} must be >= 1 (the first wafer of the lot is 1)")
+        if wafer > MAX_LOT_WAFERS:
+            raise LotDataError(f"{where}: column 'wafer': {w!r} is outside 1 to {MAX_LOT_WAFERS}: 'wafer' is the wafer's place in the lot "
+                               "counted from the first wafer on the pad (1, 2, ...), not a wafer ID or a slot number; every wafer up "
+                               "to the last named is polished (a full recipe solve each)")
         from ..inputs.units import read_value_cells
 
         try:  # "512 nm", "±4 nm"
@@ -152,7 +165,34 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
                 raise LotDataError(f"{where}: column 'zone_pressures' = {rec['zone_pressures']!r}: every pressure must be > 0")
         out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
                              lineno, rec.get("source", ""), rec.get("label", ""), str(path), t, zp))
+    check_once(out)
     return out
+
+
+def check_once(records) -> None:
+    """LotDataError naming both rows where two records give the same wafer's same quantity.
+
+    The rows of one call are one lot (several files' rows too: :func:`cmpsim.calibration.mixed.read_all`).
+    A second row would count twice in a fit, or, with another value, make it fit their mean
+    silently; two lots in one file (both from wafer 1) read as one lot would be the same mistake."""
+    first: dict[tuple, LotRecord] = {}
+    for r in records:
+        key = (r.wafer, r.quantity)  # a lot measures the recipe's top film only: a film named or not, the same quantity
+        if key not in first:
+            first[key] = r
+            continue
+        o = first[key]
+        there = f"line {o.line}" if o.path == r.path else f"{o.path}:{o.line}"
+        what = f"wafer {r.wafer}'s {r.quantity}"
+        if r.value == o.value:
+            why = f"{what} is given twice (also in {there}, the same value): it would count twice in a fit; give it once"
+        else:
+            why = (f"{what} is {r.value * 1e9:.6g} nm here and {o.value * 1e9:.6g} nm in {there}: a wafer's {r.quantity} is given once "
+                   "(repeated measurements: their mean, with its uncertainty; two lots: one at a time, each counted from its pad's "
+                   "first wafer)")
+        if r.film != o.film:
+            why += f" (films {o.film or 'not given'} and {r.film or 'not given'}: a lot measures the recipe's top film only)"
+        raise LotDataError(f"{r.path}:{r.line}: column 'wafer': {why}")
 
 
 def logged_times(records) -> list[float] | None:

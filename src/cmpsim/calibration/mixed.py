@@ -152,7 +152,7 @@ def read_all(paths) -> Measurements:
     """Read measurement files of every family (film, structures, pad, lots); ValueError naming file, line, row and column."""
     from ..io import read_text, tidy_csv
     from ..validation.data import load_datasets
-    from .lotdata import read_lot_rows
+    from .lotdata import check_once, read_lot_rows
     from .measurements import StructureRecord, read_measurements
 
     out = Measurements()
@@ -166,6 +166,7 @@ def read_all(paths) -> Measurements:
                     out.datasets += load_datasets(path, text=sub)
                 elif group == "lot":
                     out.lots += read_lot_rows(path, sub)
+                    check_once(out.lots)  # the files' lot rows are one lot: a wafer of an earlier file given again here
                 else:
                     for r in read_measurements(path, text=sub):
                         (out.structures if isinstance(r, StructureRecord) else out.pad).append(r)

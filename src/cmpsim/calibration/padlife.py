@@ -14,7 +14,7 @@ docs/polisher.md "Pad life") are fitted to them by bounded least squares in ln(v
 
 The glazing changes a wafer's rate, not its equilibrium, so one lot's solves serve every
 evaluation (a shared cache). Covariance (J^T J)^-1 at the optimum (scaled by the reduced
-chi-square without uncertainties), 95 % intervals in ln(value), correlations, and what the data
+chi-square without uncertainties, undefined without a scatter: :func:`cmpsim.calibration.uncertainty.covariance`), 95 % intervals in ln(value), correlations, and what the data
 cannot separate (:func:`cmpsim.calibration.identify.choose` before the fit, the correlations after).
 """
 
@@ -26,7 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..physics.padlife import GLAZING_CONSTANTS, check_constants, default_constants
-from .scalefit import ScaleFit, fit_statistics
+from .identify import refuse_flat
+from .scalefit import ScaleFit, fit_statistics, interval_text
 
 __all__ = ["GLAZING_CONSTANTS", "LotSetting", "PadLifeCalibration", "default_constants", "check_constants", "predict_lot",
            "choose_free", "start_jacobian", "calibrate_padlife", "padlife_constants"]
@@ -136,7 +137,7 @@ class PadLifeCalibration(ScaleFit):
     def summary(self) -> str:
         from ..tables import text_table
 
-        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", f"[{self.ci95[n][0]:.4g}, {self.ci95[n][1]:.4g}]",
+        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", interval_text(*self.ci95[n]),
                  GLAZING_CONSTANTS[n][0], self.reasons.get(n, "")] for n in self.free]
         out = [text_table(["constant", "start", "fitted", "95 % interval", "unit", "why free"], rows), ""]
         if len(self.free) > 1:
@@ -235,6 +236,8 @@ def calibrate_padlife(records, setting: LotSetting, free=None, *, max_nfev: int 
         return (predict_lot(records, {**s0, **values_of(z)}, setting) - y) / u
 
     J = central_jacobian(resid, z, len(records), h=1e-3)
+    if choice_names is None:  # asked for, and the lot's rows do not change with it: its "fitted" value would be its start
+        refuse_flat(J, free, "this lot's rows", "the constants")
     vals = values_of(z)
     # the bounds read relative to the start (the constants are of order 1e-15 1/Pa: an absolute tolerance would call every value a bound)
     chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi, chosen_again, scale=x0)

@@ -8,22 +8,33 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["ScaleFit", "log_intervals", "fit_statistics"]
+from .identify import zero_columns
+from .uncertainty import covariance
+
+__all__ = ["ScaleFit", "log_intervals", "fit_statistics", "interval_text"]
+
+
+def interval_text(lo: float, hi: float) -> str:
+    """A 95 % interval as printed: ``[-, -]`` when undefined (NaN), as the wafer fit prints one."""
+    return "[-, -]" if math.isnan(lo) or math.isnan(hi) else f"[{lo:.4g}, {hi:.4g}]"
 
 
 def log_intervals(cov: np.ndarray, names, values: dict[str, float]):
     """From the covariance of ln(value): (standard errors of ln value, correlation, 95 % intervals, standard
     errors of the values by the delta method). Intervals are exp(+-1.96 se) around the value (asymmetric);
-    an infinite or overflowing one is (0, inf)."""
-    import math
-
-    se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) if np.all(np.isfinite(cov)) else np.full(len(names), np.inf)
+    an infinite or overflowing one is (0, inf); an undefined covariance (NaN: no scatter to scale it by,
+    :func:`cmpsim.calibration.uncertainty.covariance`) gives undefined ones (NaN), not infinite ones."""
+    if np.any(np.isnan(cov)):
+        se = np.full(len(names), np.nan)
+    else:
+        se = np.sqrt(np.clip(np.diag(cov), 0.0, None)) if np.all(np.isfinite(cov)) else np.full(len(names), np.inf)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(se, se) if np.all(np.isfinite(se)) and np.all(se > 0) else np.full(cov.shape, np.nan)
     ci, stderr = {}, {}
     for k, n in enumerate(names):
         w = 1.96 * se[k]
-        ci[n] = (values[n] * math.exp(-w), values[n] * math.exp(w)) if np.isfinite(w) and w < 700 else (0.0, math.inf)
+        ci[n] = ((values[n] * math.exp(-w), values[n] * math.exp(w)) if np.isfinite(w) and w < 700 else
+                 (math.nan, math.nan) if np.isnan(w) else (0.0, math.inf))
         stderr[n] = values[n] * se[k]
     return se, corr, ci, stderr
 
@@ -33,13 +44,15 @@ def fit_statistics(J: np.ndarray, residuals: np.ndarray, free, values: dict[str,
     """What a fit in z = ln(value) reports, from its whitened ``residuals`` and Jacobian ``J`` (d residual / dz)
     at the optimum: (chi2, degrees of freedom, notes, covariance of z, correlation, 95 % intervals, standard
     errors of the values). The covariance is (J^T J)^-1, scaled by the reduced chi-square unless every
-    point carried an ``absolute`` uncertainty; ``notes`` (said first) gain what the data cannot separate,
-    read with the values and the bounds ``lo``, ``hi`` divided by ``scale`` (default 1: constants of order
-    1e-15 1/Pa are read relative to their start, or every value would sit on a bound)."""
+    point carried an ``absolute`` uncertainty, undefined without a scatter to scale by
+    (:func:`cmpsim.calibration.uncertainty.covariance`, as the wafer fit's); ``notes`` (said first) gain
+    what the data cannot separate, read with the values and the bounds ``lo``, ``hi`` divided by
+    ``scale`` (default 1: constants of order 1e-15 1/Pa are read relative to their start, or every
+    value would sit on a bound)."""
     chi2 = float(np.sum(residuals**2))
     dof = len(residuals) - len(free)
     notes = list(notes)
-    cov = _covariance(J, chi2, dof, absolute, notes)
+    cov = covariance(J, chi2, dof, absolute, notes)
     se, corr, ci, stderr = log_intervals(cov, free, values)
     if scale is None:
         notes += _identifiability(free, J, se, corr, values, lo, hi)
@@ -48,32 +61,13 @@ def fit_statistics(J: np.ndarray, residuals: np.ndarray, free, values: dict[str,
     return chi2, dof, notes, cov, corr, ci, stderr
 
 
-def _covariance(J, chi2, dof, absolute, notes) -> np.ndarray:
-    n = J.shape[1]
-    jtj = J.T @ J
-    try:
-        if np.linalg.cond(jtj) > 1e14:
-            raise np.linalg.LinAlgError
-        cov = np.linalg.inv(jtj)
-    except np.linalg.LinAlgError:
-        notes.append("J^T J is singular: the data do not determine every free constant (their standard errors are infinite)")
-        return np.full((n, n), np.inf)
-    if not absolute:
-        if dof > 0:
-            cov = cov * (chi2 / dof)
-        else:
-            notes.append("no degrees of freedom and no uncertainties: the intervals are undefined")
-            cov = np.full((n, n), np.inf)
-    return cov
-
-
 def _identifiability(free, J, se, corr, vals, lo, hi) -> list[str]:
     out = []
-    norm = np.linalg.norm(J, axis=0)
+    zero = zero_columns(J)
     for k, n in enumerate(free):
-        if norm[k] < 1e-9 * max(norm.max(), 1e-300):
+        if zero[k]:
             out.append(f"{n}: the data do not depend on it (its column of the Jacobian is zero)")
-        elif not np.isfinite(se[k]) or se[k] > math.log(10.0):
+        elif se[k] > math.log(10.0):  # an infinite one too; an undefined one (NaN) is said by the covariance's note
             out.append(f"{n}: not determined by these data (standard error above a factor 10)")
         if np.isclose(vals[n], lo[k], rtol=1e-3) or np.isclose(vals[n], hi[k], rtol=1e-3):
             out.append(f"{n}: ended on a bound ({vals[n]:.4g}); its interval is not meaningful")

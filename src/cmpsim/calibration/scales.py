@@ -52,13 +52,13 @@ class ScaleCalibration:
         """[scale, constant, fitted, 95 % interval, unit] of every fitted constant (display units for the film's)."""
         from ..inputs.config import PARAMETERS, format_display
         from .die import DIE_CONSTANTS
+        from .scalefit import interval_text
         from .thermal import THERMAL_CONSTANTS
 
         rows = []
         if self.pad is not None:
             for n in self.pad.free:
-                lo, hi = self.pad.ci95[n]
-                rows.append(["pad", n, f"{self.pad.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", THERMAL_CONSTANTS[n][0]])
+                rows.append(["pad", n, f"{self.pad.values[n]:.4g}", interval_text(*self.pad.ci95[n]), THERMAL_CONSTANTS[n][0]])
         if self.film is not None:
             for n in self.film.free:
                 lo, hi = self.film.ci95[n]
@@ -67,14 +67,12 @@ class ScaleCalibration:
                              PARAMETERS[n].display or "-"])
         if self.die is not None:
             for n in self.die.free:
-                lo, hi = self.die.ci95[n]
-                rows.append(["die", n, f"{self.die.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", DIE_CONSTANTS[n][0]])
+                rows.append(["die", n, f"{self.die.values[n]:.4g}", interval_text(*self.die.ci95[n]), DIE_CONSTANTS[n][0]])
         if self.padlife is not None:
             from .padlife import GLAZING_CONSTANTS
 
             for n in self.padlife.free:
-                lo, hi = self.padlife.ci95[n]
-                rows.append(["pad life", n, f"{self.padlife.values[n]:.4g}", f"[{lo:.4g}, {hi:.4g}]", GLAZING_CONSTANTS[n][0]])
+                rows.append(["pad life", n, f"{self.padlife.values[n]:.4g}", interval_text(*self.padlife.ci95[n]), GLAZING_CONSTANTS[n][0]])
         return rows
 
     def summary(self) -> str:

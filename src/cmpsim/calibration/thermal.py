@@ -31,8 +31,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .identify import refuse_flat
 from .measurements import ThermalRecord
-from .scalefit import ScaleFit, fit_statistics
+from .scalefit import ScaleFit, fit_statistics, interval_text
 from .uncertainty import central_jacobian
 
 __all__ = ["THERMAL_CONSTANTS", "FrictionalPower", "frictional_power", "predict_thermal", "calibrate_thermal", "ThermalCalibration",
@@ -165,7 +166,7 @@ class ThermalCalibration(ScaleFit):
     def summary(self) -> str:
         from ..tables import text_table
 
-        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", f"[{self.ci95[n][0]:.4g}, {self.ci95[n][1]:.4g}]",
+        rows = [[n, f"{self.start[n]:.4g}", f"{self.values[n]:.4g}", interval_text(*self.ci95[n]),
                  THERMAL_CONSTANTS[n][0], self.reasons.get(n, "")] for n in self.free]
         out = [text_table(["constant", "start", "fitted", "95 % interval", "unit", "why free"], rows), ""]
         if len(self.free) > 1:
@@ -237,6 +238,7 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
     if not records:
         raise ValueError("no pad records (pad_temperature_rise, friction_coefficient) to calibrate on")
     base = config if config is not None else Config.preset("300mm").replace(grid="coarse")
+    asked = free is not None
     if free is None:
         free, reasons = choose_free(records)
     else:
@@ -266,6 +268,8 @@ def calibrate_thermal(records, config=None, free=None, *, start: dict | None = N
                         gtol=1e-14, max_nfev=max_nfev)
     z = fit.x
     J = central_jacobian(resid, z, len(records), h=1e-4)
+    if asked:  # asked for, and the pad rows do not change with it: its "fitted" value would be its start
+        refuse_flat(J, free, "these pad rows", "the constants")
     vals = {n: float(x0[k] * math.exp(z[k])) for k, n in enumerate(free)}
     chi2, dof, notes, cov, corr, ci, stderr = fit_statistics(J, resid(z), free, vals, absolute, lo, hi)
     m1 = predict_thermal(records, {**s0, **vals}, base)

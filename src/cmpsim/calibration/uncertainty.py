@@ -15,7 +15,7 @@ import numpy as np
 
 from ..inputs.config import PARAMETERS, format_display
 
-__all__ = ["Uncertainty", "central_jacobian", "uncertainty"]
+__all__ = ["EXACT_FIT_REDUCED_CHI2", "Uncertainty", "central_jacobian", "covariance", "uncertainty"]
 
 
 @dataclass
@@ -54,7 +54,15 @@ def central_jacobian(residuals, z: np.ndarray, n_points: int, h: float = 1e-3, l
 EXACT_FIT_REDUCED_CHI2 = 1e-10
 
 
-def _covariance(J: np.ndarray, chi2: float, dof: int, absolute_sigma: bool, notes: list[str]) -> np.ndarray:
+def covariance(J: np.ndarray, chi2: float, dof: int, absolute_sigma: bool, notes: list[str]) -> np.ndarray:
+    """The covariance of the fit variables z from the Jacobian ``J`` of the whitened residuals at the optimum
+    (every fit: the wafer's, the die's, the pad's and the pad life's); ``notes`` gain why it is not finite.
+
+    With every point's uncertainty (``absolute_sigma``) it is (J^T J)^-1, whatever ``dof``. Without, it is
+    scaled by the reduced chi-square chi2/dof, which needs a scatter to scale by: with no degree of
+    freedom left (``dof`` <= 0), or points fitted exactly (chi2/dof < :data:`EXACT_FIT_REDUCED_CHI2`),
+    it is undefined (NaN, the intervals then undefined too), not shrunk to nothing. A singular J^T J
+    (condition above 1e14) gives an infinite covariance (intervals [0, inf])."""
     n = J.shape[1]
     jtj = J.T @ J
     try:
@@ -64,16 +72,17 @@ def _covariance(J: np.ndarray, chi2: float, dof: int, absolute_sigma: bool, note
     except np.linalg.LinAlgError:
         cov = np.full((n, n), np.inf)
         notes.append("J^T J is singular: the data do not determine the free parameters (not identifiable); standard errors are infinite")
-    if not absolute_sigma:
-        exact = dof > 0 and chi2 / dof < EXACT_FIT_REDUCED_CHI2
-        cov = cov * (chi2 / dof if dof > 0 and not exact else float("nan"))
-        if dof == 0:
-            notes.append("no degrees of freedom left: without absolute uncertainties the standard errors are undefined")
-        elif exact:
-            notes.append(f"the points are fitted exactly (reduced chi-square {chi2 / dof:.3g}: e.g. repeated or proportional points, which give "
-                         "no more settings than free inputs): without absolute uncertainties there is no scatter to estimate the standard "
-                         "errors from, so they are undefined; give each point its uncertainty")
-    return cov
+    if absolute_sigma:
+        return cov
+    if dof <= 0:
+        notes.append("no degrees of freedom left: without absolute uncertainties the standard errors are undefined")
+        return np.full((n, n), np.nan)
+    if chi2 / dof < EXACT_FIT_REDUCED_CHI2:
+        notes.append(f"the points are fitted exactly (reduced chi-square {chi2 / dof:.3g}: e.g. repeated or proportional points, which give "
+                     "no more settings than free inputs): without absolute uncertainties there is no scatter to estimate the standard "
+                     "errors from, so they are undefined; give each point its uncertainty")
+        return np.full((n, n), np.nan)
+    return cov * (chi2 / dof)
 
 
 def uncertainty(
@@ -93,7 +102,7 @@ def uncertainty(
     """
     free = list(values)
     notes: list[str] = []
-    cov = _covariance(J, chi2, dof, absolute_sigma, notes)
+    cov = covariance(J, chi2, dof, absolute_sigma, notes)
     diag = np.diag(cov)
     if np.any(np.isnan(diag)):  # undefined (no scatter to scale by): no interval, not an infinite one
         se_z = np.full(len(free), np.nan)
