@@ -27,12 +27,13 @@ from .inputs import recipe_overrides
 @click.option("--config", "config_path", type=click.Path(dir_okay=False), default=None, help="A configuration file applied to every step unless the step sets the input: a process file of `cmpsim calibrate` applies its fitted constants (and the model choices they need) with the recipe's own tool, and its pad life's glazing and conditioning constants ([calibration.padlife]); any other file the inputs it names. --set wins over it.")
 @click.option("--controller-config", "controller_path", type=click.Path(dir_okay=False), default=None, metavar="FILE", help="The controller's model of the pad's life (its glazing clock and drift prior): the [calibration.padlife] constants of this process file. Default: the pad's own (--config's, else the defaults). A what-if: the pad of --config controlled with the model of another calibration.")
 @click.option("--refit-model", "refit_model", is_flag=True, help="With --control ewma on the glazing clock: after each wafer the controller refits its pad-life model's wear coefficient k_w to the rates measured so far (when they identify it within a factor 2) and replays its filter on the refitted clock: a pad that glazes at another pace than the model's is followed (docs/polisher.md, C6-C8).")
+@click.option("--metrology-noise", "metrology_noise", default="0 nm", show_default=True, metavar="LENGTH", help="One sigma of the metrology the controller sees the wafers through: each radius of every incoming and post-polish profile is measured with an independent normal error of this size (from --seed). The lot's results keep the true thicknesses.")
 @click.option("--set", "assignments", multiple=True, metavar="NAME=VALUE", help="Change an input for every step unless the step sets it (repeatable).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (SI): wafers [{index, polish_time (s), removal_rate_mean (m/s), final_thickness_mean (m), final_thickness_nonuniformity (fraction), zone_pressures (Pa), ...}], target, units.")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), default=None, metavar="DIR", help="Write lot.json, lot.csv and the lot plot lot.png into DIR, and the checkpoint lot.checkpoint.json after every wafer.")
 @click.option("--resume", is_flag=True, help="Go on from the checkpoint in --out DIR (an interrupted lot, even killed with -9): the same results as without the interruption. Refused if the checkpoint's inputs differ; without a checkpoint the lot starts.")
 def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clock, drift_prior, zone_weight, zone_feedback, seed, idle_time, qualification, worn_summits,
-                config_path, controller_path, refit_model, assignments, as_json, out_dir, resume):
+                config_path, controller_path, refit_model, metrology_noise, assignments, as_json, out_dir, resume):
     """Polish a lot of wafers of RECIPE.toml in sequence on one pad that warms, glazes and is conditioned.
 
     Each wafer's incoming thickness varies (reproducible with --seed); with --control ewma the
@@ -66,11 +67,15 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
             if control == "none":
                 raise ValueError("--controller-config sets the controller's model: it needs --control ewma or single_ewma")
         idle = to_si(idle_time, "s", "--idle-time", example="s")
+        noise = to_si(metrology_noise, "m", "--metrology-noise", example="nm")
+        if not (noise >= 0 and noise < float("inf")):
+            raise ValueError(f"--metrology-noise is a standard deviation >= 0 (e.g. 1 nm); got {metrology_noise!r}")
         result = run_lot(parsed, wafers, conditioning=conditioning, control=control, seed=seed, overrides=overrides, idle_time=idle,
                          qualification=qualification, worn_summits=worn_summits, weight=weight, drift_weight=drift_weight,
                          zone_weight=zone_weight, zone_feedback=zone_feedback, clock=clock, drift_prior=drift_prior,
                          checkpoint=None if out_dir is None else Path(out_dir) / NAME, resume=resume, pad_constants=pad_constants,
-                         model_pad_constants=model_constants, refit_model=refit_model)
+                         model_pad_constants=model_constants, refit_model=refit_model,
+                         metrology_noise=noise)
     if out_dir is not None:
         write_lot(result, out_dir)
     if as_json:

@@ -43,7 +43,7 @@ from .checkpoint import (LotCheckpoint, digest, life_from_dict, life_to_dict, pa
                          write_checkpoint)
 from .control import CONTROL, DRIFT_WEIGHT, WEIGHT, estimator_from_dict, feed_forward_time, make_estimator
 from .engine import PadState, idle, polish
-from .incoming import incoming_profiles
+from .incoming import incoming_profiles, measurement_errors
 from .pad import GlazingClock, PadLife, mean_factor, time_mean, wear_through
 from .recipe import RecipeError, load_recipe
 from .refit import History, RefitState, Seen, refit, refitted_model
@@ -107,6 +107,7 @@ def run_lot(
     polish_times=None,
     polish_zone_pressures=None,
     refit_model: bool = False,
+    metrology_noise: float = 0.0,
 ) -> LotResult:
     """Polish ``wafers`` wafers of ``recipe`` in sequence on one pad (``cmpsim lot``).
 
@@ -183,6 +184,10 @@ def run_lot(
         model's wear coefficient k_w to the rates measured so far (when they identify it) and replays
         its filter on the refitted clock (:mod:`cmpsim.polisher.refit`, eqs. C6-C8). Off: the model
         keeps its constants.
+    metrology_noise : float
+        m, one sigma: the controller measures each radius of every wafer's incoming and post-polish
+        profile with an independent normal error of this size (:func:`cmpsim.polisher.incoming.measurement_errors`,
+        from ``seed``); 0: it measures them exactly. The lot's records keep the true thicknesses.
     after_wafer : callable, optional
         Called with the wafer's :class:`WaferRecord` after each wafer (and its checkpoint).
     """
@@ -209,6 +214,8 @@ def run_lot(
     if refit_model and not (control == "ewma" and clock == "glazing"):
         raise ValueError(f"refit_model refits the pad-life model of the glazing clock: it needs control 'ewma' with clock 'glazing'; "
                          f"got control {control!r}, clock {clock!r}")
+    if not (isinstance(metrology_noise, (int, float)) and math.isfinite(metrology_noise) and metrology_noise >= 0):
+        raise ValueError(f"metrology_noise must be a standard deviation >= 0 m; got {metrology_noise!r}")
     if resume and checkpoint is None:
         raise ValueError("resume needs the checkpoint to resume from (cmpsim lot --resume needs --out DIR)")
     target = recipe.target.remaining
@@ -245,6 +252,8 @@ def run_lot(
         inputs["polish_zone_pressures"] = repr(polish_zone_pressures)
     if refit_model:
         inputs["refit_model"] = True
+    if metrology_noise:
+        inputs["metrology_noise"] = float(metrology_noise)
 
     def between_wafers(result):  # idle: the pad cools; ex situ, the disk conditions it
         cooled = idle(result.pad_state, idle_time, base)
@@ -262,6 +271,9 @@ def run_lot(
             monitors = tuple(Seen(tuple(d), None, rated if j == len(setup["monitor_durations"]) - 1 else None)
                              for j, d in enumerate(setup["monitor_durations"]))
             refit_state = RefitState.begin(model, base, estimator.level, monitors)
+        if metrology_noise:  # the metrology's errors on every wafer, drawn once (kept in the checkpoint: a lot without a seed resumes too)
+            errors = measurement_errors(wafers, len(setup["radius"]), float(metrology_noise), seed)
+            setup["metrology"] = {"incoming": errors[0].tolist(), "final": errors[1].tolist()}
         saved = LotCheckpoint(inputs, 0, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones), [], solves,
                               life_to_dict(model_life), _dict(refit_state))
         if checkpoint is not None:
@@ -281,12 +293,18 @@ def run_lot(
     radius = np.asarray(setup["radius"], dtype=float)
     weights = np.asarray(setup["weights"], dtype=float)
     profiles = np.asarray(setup["profiles"], dtype=float)
+    errors = None if "metrology" not in setup else (np.asarray(setup["metrology"]["incoming"], dtype=float),
+                                                    np.asarray(setup["metrology"]["final"], dtype=float))
     others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
     start_pressures = tuple(setup["start_pressures"])
 
     for k in range(start, wafers):
         inc = profiles[k]
         inc_mean = float(np.sum(weights * inc))
+        seen_in, seen_in_mean = inc, inc_mean  # the incoming profile as the metrology measures it
+        if errors is not None:
+            seen_in = inc + errors[0][k]
+            seen_in_mean = float(np.sum(weights * seen_in))
         wafer_recipe, ov = recipe, dict(overrides)
         plan, predicted = None, None
         if polish_times is not None:  # a logged lot, replayed
@@ -296,18 +314,19 @@ def run_lot(
         if controlled:
             pressures = start_pressures
             if feedback is not None:
-                plan = feedback.plan(zones, inc, float(target))
+                plan = feedback.plan(zones, seen_in, float(target))
                 pressures = plan.pressures
                 ov["zone_pressures"] = pressures
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
-            predicted, t, wafer_recipe = _next_wafer(recipe, step_k, ov, estimator, factor, inc_mean, float(target), k + 1, model_life,
+            predicted, t, wafer_recipe = _next_wafer(recipe, step_k, ov, estimator, factor, seen_in_mean, float(target), k + 1, model_life,
                                                      model, time_step)
         result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
                         pad_life=life_model, cache=cache)
         solves += result.solves
         total_time = sum(s.duration for s in result.steps)
         final = np.asarray(result.final.thickness[0], dtype=float)
-        removed = inc_mean - float(np.sum(weights * final))
+        seen_out = final if errors is None else final + errors[1][k]  # the post-polish profile as measured
+        removed = seen_in_mean - float(np.sum(weights * seen_out))  # the removal the controller sees
         pressures = tuple(ov.get("zone_pressures", start_pressures))
         record = WaferRecord(
             index=k + 1,
@@ -335,7 +354,7 @@ def run_lot(
             age = model_age if estimator.clock == "glazing" else float(k + 1)
             estimator = estimator.update(removed / total_time / factor, age)
             if feedback is not None:
-                zones = feedback.learn(zones, pressures, (inc - final) / total_time)
+                zones = feedback.learn(zones, pressures, (seen_in - seen_out) / total_time)
         if refit_state is not None:  # C6-C8: the controller refits its model's k_w to the rates it measured
             seen = Seen(tuple(float(r.duration) for r in result.steps), ov.get("zone_pressures"),
                         removed / total_time / factor if total_time > 0 else None)
