@@ -140,6 +140,13 @@ class LotResult:
         ax[0, 0].legend(fontsize=8)
         ax[0, 1].plot(idx, [w.removal_rate_mean * 6e10 for w in self.wafers], "o-")
         ax[0, 1].set_ylabel("mean removal rate (nm/min)")
+        refitted = [(w.index, w.model_wear_coefficient) for w in self.wafers if w.model_wear_coefficient is not None]
+        if refitted:  # the controller's refitted pad-life model (--refit-model)
+            twin = ax[0, 1].twinx()
+            twin.plot([i for i, _ in refitted], [k * 1e15 for _, k in refitted], "s--", ms=3, color="C3", label="controller's k_w")
+            twin.set_ylim(0, 1.3e15 * max(k for _, k in refitted))
+            twin.set_ylabel("controller's k_w (1e-15 1/Pa)", color="C3")
+            twin.legend(fontsize=7, loc="upper right")
         ax[1, 0].plot(idx, [w.polish_time for w in self.wafers], "o-")
         ax[1, 0].set_ylabel("polish time (s)")
         zones = np.array([w.zone_pressures for w in self.wafers], dtype=float) / 6894.757293168361
