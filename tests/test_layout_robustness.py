@@ -137,3 +137,22 @@ def test_a_recursive_hierarchy_is_named(tmp_path):
     lib.write_gds(str(path))
     with pytest.raises(ValueError, match=r"recursive.gds' has a recursive cell hierarchy \(a cell placed inside itself"):
         read_layout(path)
+
+
+def test_cmpsim_die_without_a_layer_lists_the_files_layers(tmp_path):
+    """A newcomer's first try on a layout, `cmpsim die CHIP.gds`, is told which layers carry shapes (exit 2)."""
+    from click.testing import CliRunner
+
+    from cmpsim.cli import main
+
+    ly = kdb.Layout()
+    top = ly.create_cell("TOP")
+    top.shapes(ly.layer(8, 0)).insert(kdb.Box(0, 0, 10000, 10000))
+    top.shapes(ly.layer(10, 22)).insert(kdb.Box(0, 0, 5000, 5000))
+    top.shapes(ly.layer(63, 0)).insert(kdb.Text("label", 0, 0))
+    path = _write(ly, tmp_path / "chip.gds")
+    res = CliRunner().invoke(main, ["die", path, "--out", str(tmp_path / "out")])
+    assert res.exit_code == 2
+    said = " ".join(res.output.split())
+    assert "needs --layer" in said and said.rstrip().endswith("chip.gds's layers with shapes: 8/0, 10/22")  # the text layer is not one
+    assert not (tmp_path / "out").exists()

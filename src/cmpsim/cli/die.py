@@ -109,7 +109,8 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
                                                 feature_contact=feature_contact, progress=told, calibration=_stack_calibration(config_path))
         elif real:
             if not layers:
-                raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml")
+                raise ValueError("a layout file needs --layer L/D (or a name with --pdk / --layer-map), or --stack FILE.toml"
+                                 + _layers_of(layout))
             if fill:
                 from ..die.fill import fill_die
                 from ..layout.fill import resolve_fill
@@ -284,3 +285,14 @@ def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> d
         return kwargs  # a stack applies them level by level, to the levels of their process (simulate_stack(calibration=))
     return apply_die_constants(kwargs, dc, given=tuple(parse_assignments(params)))
 
+
+
+def _layers_of(layout) -> str:
+    """"; FILE's layers with shapes: ..." for a message (empty if the file cannot be read: its own error comes later)."""
+    from ..layout.reader import layer_listing, read_layout
+
+    try:
+        db = layout if hasattr(layout, "db") else read_layout(layout)
+        return f"; {db.name}'s layers with shapes: {layer_listing(db)}"
+    except Exception:  # noqa: BLE001 - a file that cannot be read is reported by the read itself
+        return ""

@@ -24,7 +24,7 @@ import numpy as np
 
 from .engine import WindowGrid, window_rasters
 from .layermaps import resolve_layers
-from .reader import Layout, LayoutTooLarge, layer_indexes, layers_in, read_layout, top_cell
+from .reader import Layout, LayoutTooLarge, layer_indexes, layer_listing, layers_in, read_layout, top_cell
 
 __all__ = ["LayoutWindows", "extract_windows", "extract_levels", "window_fields", "MAX_WINDOWS"]
 
@@ -85,7 +85,7 @@ def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]
     groups = resolve_layers(layers, pdk=pdk, layer_map=layer_map)
     in_file = layers_in(layout)
     present = layers_in(layout, cell)
-    listing = ", ".join(f"{l}/{d}" for l, d in sorted(in_file)) or "none (the file holds no shapes: empty cells or texts only)"
+    listing = layer_listing(layout)
     pairs: set[tuple[int, int]] = set()
     for spec, group in zip([layers] if isinstance(layers, (str, tuple)) else layers, groups):
         have = [p for p in group if p in present]

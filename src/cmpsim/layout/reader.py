@@ -24,7 +24,7 @@ import klayout.db as kdb
 
 from .twisted import untwist
 
-__all__ = ["Layout", "read_layout", "top_cell", "layers_in", "LayoutTooLarge"]
+__all__ = ["Layout", "read_layout", "top_cell", "layers_in", "layer_listing", "LayoutTooLarge"]
 
 _GDS_MAGIC = b"\x00\x06\x00\x02"
 _OAS_MAGIC = b"%SEMI-OASIS\r\n"
@@ -155,6 +155,11 @@ def layers_in(layout: Layout, cell: kdb.Cell | None = None) -> set[tuple[int, in
         if any(not c.bbox(li).empty() for c in cells):
             found.add((int(info.layer), int(info.datatype)))
     return found
+
+
+def layer_listing(layout: Layout, cell: kdb.Cell | None = None) -> str:
+    """The layers that carry shapes (under ``cell``, default any top cell) as "L/D, L/D, ...", or why there are none."""
+    return ", ".join(f"{l}/{d}" for l, d in sorted(layers_in(layout, cell))) or "none (the file holds no shapes: empty cells or texts only)"
 
 
 def layer_indexes(layout: Layout, pairs) -> list[int]:
