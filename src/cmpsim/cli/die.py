@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import _fail, _rich_table, command_errors, main
+from .group import _fail, _rich_table, command_errors, main, out_console
 from .inputs import config_options, load_config, parse_assignments
 from .progress import extraction_bar
 
@@ -150,9 +150,8 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     if as_json:
         click.echo(to_json(result))
         return
-    from rich.console import Console
 
-    console = Console()
+    console = out_console()
     if stack is not None or real:
         _print_layout_run(console, result, stack is not None, wafer)
         if plan is not None:

@@ -46,6 +46,21 @@ def _warn(message: str) -> None:
     click.echo(f"cmpsim: warning: {text}", err=True)
 
 
+#: Columns of the tables when stdout is not a terminal (a log file, a pipe): rich's 80 would cut the headers short.
+PIPE_WIDTH = 240
+
+
+def out_console():
+    """The console of a command's tables on stdout: the terminal's width, or :data:`PIPE_WIDTH` columns
+    when stdout is a file or a pipe (unless ``COLUMNS`` says otherwise)."""
+    import os
+
+    from rich.console import Console
+
+    piped = not sys.stdout.isatty() and "COLUMNS" not in os.environ
+    return Console(width=PIPE_WIDTH if piped else None)
+
+
 def _rich_table(title, header, rows):
     from rich.table import Table
 

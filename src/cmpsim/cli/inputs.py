@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import click
 
-from .group import main
+from .group import main, out_console
 
 #: The names of cmpsim.inputs.config.PRESETS (written out so that the command line starts without importing the config; a test keeps them equal).
 PRESET_NAMES = ("default", "paper", "300mm")
@@ -68,11 +68,10 @@ def params(markdown):
     if markdown:
         click.echo(parameter_table_markdown(), nl=False)
         return
-    from rich.console import Console
 
     from ..tables import WIDE, legible_table
 
-    console = Console()
+    console = out_console()
     rows, detail = [], []
     for n, p in PARAMETERS.items():
         unit = p.display if p.unit not in ("choice", "grid") else ""

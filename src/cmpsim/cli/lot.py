@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..polisher.control import CLOCKS, CONTROL, DRIFT_PRIORS, DRIFT_WEIGHT, WEIGHT
-from .group import _rich_table, command_errors, main
+from .group import _rich_table, command_errors, main, out_console
 from .inputs import recipe_overrides
 
 
@@ -81,14 +81,13 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
     if as_json:
         click.echo(result.to_json())
         return
-    from rich.console import Console
 
     rows = [
         (str(w.index), f"{w.polish_time:.1f}", f"{w.removal_rate_mean * 6e10:.1f}", f"{w.final_thickness_mean * 1e9:.1f}", f"{100 * w.final_thickness_nonuniformity:.2f}",
          f"{w.rate_factor:.3f}", " ".join(f"{p / 6894.757293168361:.2f}" for p in w.zone_pressures))
         for w in result.wafers
     ]
-    console = Console()
+    console = out_console()
     console.print(_rich_table(f"lot of {len(rows)} wafers ({parsed.source}): control {control}, conditioning {result.conditioning}",
                               ["wafer", "polish time (s)", "mean rate (nm/min)", "final mean (nm)", "non-uniformity (%)", "rate factor", "zone pressures (psi)"], rows))
     if result.qualification is not None:

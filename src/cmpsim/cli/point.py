@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import _fail, _warn, command_errors, main
+from .group import _fail, _warn, command_errors, main, out_console
 from .inputs import config_options, load_config
 
 
@@ -47,9 +47,8 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
     if as_json:
         click.echo(result.to_json(schema=schema))
         return
-    from rich.console import Console
 
-    console = Console()
+    console = out_console()
     console.print(result.summary_table(console.width))
     if result.flow_factor_floored_fraction > 0:
         _warn(

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import _rich_table, command_errors, main
+from .group import _rich_table, command_errors, main, out_console
 from .inputs import recipe_overrides
 
 
@@ -56,9 +56,8 @@ def polish_command(recipe, config_path, assignments, time_step, as_json, out_dir
     if as_json:
         click.echo(result.to_json())
         return
-    from rich.console import Console
 
-    console = Console()
+    console = out_console()
     console.print(_rich_table(f"recipe {parsed.source}", ["step", "end", "duration (s)", "mean rate (nm/min)", "pad temperature (K)", "top film", "cleared (% area)"], result.summary_rows()))
     for s in result.steps:
         if s.endpoint is not None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import _fail, _rich_table, main
+from .group import _fail, _rich_table, main, out_console
 from .inputs import config_options, load_config
 
 
@@ -37,9 +37,8 @@ def reproduce_command(out_dir, config_path, preset, assignments, grid):
         rep = reproduce(out=out_dir, progress=True, config=cfg, command=command)
     except (ValueError, OSError) as exc:
         _fail(str(exc))
-    from rich.console import Console
 
-    console = Console()
+    console = out_console()
     rows = [[s.id, s.figure, s.text, "[green]yes[/green]" if s.reproduced else "[red]no[/red]"] for s in rep.statements]
     console.print(_rich_table(f"Statements of the paper reproduced: {rep.n_reproduced} of {len(rep.statements)}", ["#", "Fig.", "statement", "reproduced"], rows))
     console.print(

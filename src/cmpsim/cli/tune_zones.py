@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import _rich_table, command_errors, main
+from .group import _rich_table, command_errors, main, out_console
 from .inputs import config_options, load_config
 
 
@@ -52,9 +52,8 @@ def tune_zones_command(config_path, preset, assignments, grid, bounds, keep, inc
         (f"{1e3 * r:.1f}", f"{p0 / psi:.3f}", f"{p1 / psi:.3f}")
         for r, p0, p1 in zip(result.zone_radii, result.before["zone_pressures"], result.zone_pressures)
     ]
-    from rich.console import Console
 
-    console = Console()
+    console = out_console()
     if result.ring_pressure is not None:
         rows.append(("ring", f"{result.before['ring_pressure'] / psi:.3f}", f"{result.ring_pressure / psi:.3f}"))
     console.print(_rich_table("zone pressures", ["zone outer radius (mm)", "before (psi)", "tuned (psi)"], rows))

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import _fail, _rich_table, main
+from .group import _fail, _rich_table, main, out_console
 from .inputs import config_options, load_config
 
 
@@ -101,9 +101,8 @@ def validate_command(data, config_path, preset, assignments, grid, out_dir, mark
         if comparisons:
             click.echo("\n" + markdown_table(kind_header, kind_rows))
         return
-    from rich.console import Console
 
-    console = Console()
+    console = out_console()
     if report is not None:
         console.print(_rich_table("Model vs data, per point (shape data sets: model times the fitted scale)", report.POINT_HEADER, report.point_rows()))
         console.print(_rich_table("Per data set", report.DATASET_HEADER, report.dataset_rows()))

@@ -4,28 +4,32 @@ holds under drift; docs/polisher.md, "A controller that refits its model", eqs. 
 The double EWMA on the glazing clock (:mod:`cmpsim.polisher.control`) takes its pad ages from the
 controller's model of the pad's life (:mod:`cmpsim.polisher.pad`, eqs. L1-L4). When that model is
 another pad's, the clock runs at the wrong pace and the filter chases the error
-(docs/polisher.md, "When the controller's model is wrong"). With ``refit`` the controller re-estimates
-the model's wear coefficient k_w after each wafer from the rates it measured so far, the certainty-
-equivalence of a self-tuning controller (Astrom & Wittenmark, *Adaptive Control*, 2nd ed. 1995,
-ch. 3: estimate the model's parameter from the plant's past, then control as if it were true):
+(docs/polisher.md, "When the controller's model is wrong"). With ``refit_model`` the controller
+re-estimates the model's wear coefficient k_w, and its critical glazed area G_c when the rates
+separate them, after each wafer from the rates it measured so far: the certainty equivalence of a
+self-tuning controller (Astrom & Wittenmark, *Adaptive Control*, 2nd ed. 1995, ch. 3: estimate the
+model's parameters from the plant's past, then control as if they were true):
 
-- (C6) the rates follow the model's glazing factor, r_j = a f_j(k_w), j over the last monitor wafer
-  and the lot's wafers: k_w minimises S(k_w) = sum_j (e_j - mean e)^2, e_j = ln r_j - ln f_j(k_w)
-  (the level a profiled out). The controller's history of polish times is what the model walks
-  through, and its worn volume is linear in k_w (eq. L2: dW/dt = k_w P U - r_c W from W = 0), so
-  W_j(k_w) = (k_w / k_0) W_j(k_0): each wafer is walked once, as it comes, at the model's starting
-  constants (:class:`History`), and the factors of every trial k_w are computed at once.
-- (C7) the refit is taken only when the data identify k_w: at least 3 rates (one degree of
-  freedom), the minimum inside [k_0/100, 100 k_0] (k_0 the model's constant before any refit), and
-  the 95 % half-width of ln k_w, 1.96 sqrt(2 s^2 / S''(ln k_w)) with s^2 = S_min/(n - 2), below
-  ln 2 (k_w known within a factor 2). Otherwise the model keeps its k_w (a pad in its in-situ
-  balance: every f_j alike, S flat).
+- (C6) the rates follow the model's glazing factor, r_j = a f_j(k_w, G_c), j over the last monitor
+  wafer and the lot's wafers: the constants minimise S = sum_j (e_j - mean e)^2,
+  e_j = ln r_j - ln f_j (the level a profiled out). The model walks through the controller's
+  history of polish times, and its worn volume is linear in k_w (eq. L2: dW/dt = k_w P U - r_c W
+  from W = 0), so W_j(k_w) = (k_w / k_0) W_j(k_0): each wafer is walked once, as it comes, at the
+  model's starting constants (:class:`History`), and every trial k_w is a scale on the samples; G_c
+  enters eq. L4 only. k_w by bounded Brent, G_c by the profile of S over it.
+- (C7) a refit is taken only when the data identify it: at least 3 rates for k_w (one degree of
+  freedom), 4 for k_w and G_c; the minimum inside [1/100, 100] times the model's starting
+  constants; the 95 % half-width of each logarithm, 1.96 sqrt(diag(2 s^2 H^-1)) with
+  s^2 = S_min / dof and H the Hessian of S, below ln 2 (known within a factor 2). Both constants
+  when both pass, else k_w alone when it passes, else the model keeps its constants (a pad in its
+  in-situ balance: every f_j alike, S flat).
 - (C8) with new constants the controller's model takes the state and the pad ages of the wafers
-  polished that they give (from the same samples), and the double EWMA is replayed from its seed over the measured
-  rates at those ages (eqs. C2-C3): the filter is the one the refitted model would have run.
+  polished that they give (from the same samples), and the double EWMA is replayed from its seed
+  over the measured rates at those ages (eqs. C2-C3): the filter is the one the refitted model
+  would have run.
 
-The history (each wafer's step durations, zone pressures and measured rate), the seed and k_w go
-into the lot's checkpoint (``refit``), so that a resumed lot refits identically.
+The history (each wafer's step durations, zone pressures and measured rate), the seed and the
+constants go into the lot's checkpoint (``refit``), so that a resumed lot refits identically.
 """
 
 from __future__ import annotations
@@ -40,11 +44,11 @@ from .pad import PadLife, wear_samples
 
 __all__ = ["Seen", "RefitState", "History", "refit", "walk", "refitted_model", "starting_model", "MIN_RATES", "IDENTIFIED", "SPAN"]
 
-#: C7: the fewest measured rates a refit takes (the level and k_w fitted, one degree of freedom left).
+#: C7: the fewest measured rates a refit of k_w takes (the level and k_w fitted, one degree of freedom left); one more for G_c.
 MIN_RATES = 3
-#: C7: the largest 95 % half-width of ln k_w a refit is taken with (k_w known within a factor 2).
+#: C7: the largest 95 % half-width of the logarithm of a refitted constant (known within a factor 2).
 IDENTIFIED = math.log(2.0)
-#: C7: k_w is looked for within [k_0 / SPAN, SPAN k_0].
+#: C7: each constant is looked for within [1/SPAN, SPAN] times the model's starting one.
 SPAN = 100.0
 
 
