@@ -180,10 +180,11 @@ def run_lot(
     polish_zone_pressures : sequence of tuples, optional
         With ``polish_times``: each wafer's zone pressures (Pa) as logged, for every step.
     refit_model : bool
-        With ``control = "ewma"`` on the glazing clock: after each wafer the controller refits its
-        model's wear coefficient k_w to the rates measured so far (when they identify it) and replays
-        its filter on the refitted clock (:mod:`cmpsim.polisher.refit`, eqs. C6-C8). Off: the model
-        keeps its constants.
+        With ``control = "ewma"`` on the glazing clock and a one-step recipe: after each wafer the
+        controller refits its model's wear coefficient k_w, and its critical glazed area G_c when the
+        rates separate them, to the rates measured so far (when they identify them) and replays its
+        filter on the refitted clock (:mod:`cmpsim.polisher.refit`, eqs. C6-C8). Off: the model keeps
+        its constants.
     metrology_noise : float
         m, one sigma: the controller measures each radius of every wafer's incoming and post-polish
         profile with an independent normal error of this size (:func:`cmpsim.polisher.incoming.measurement_errors`,
@@ -214,8 +215,13 @@ def run_lot(
     if refit_model and not (control == "ewma" and clock == "glazing"):
         raise ValueError(f"refit_model refits the pad-life model of the glazing clock: it needs control 'ewma' with clock 'glazing'; "
                          f"got control {control!r}, clock {clock!r}")
-    if not (isinstance(metrology_noise, (int, float)) and math.isfinite(metrology_noise) and metrology_noise >= 0):
+    if isinstance(metrology_noise, bool) or not (isinstance(metrology_noise, (int, float, np.integer, np.floating))
+                                                 and math.isfinite(metrology_noise) and metrology_noise >= 0):
         raise ValueError(f"metrology_noise must be a standard deviation >= 0 m; got {metrology_noise!r}")
+    if refit_model and len(recipe.steps) > 1:
+        raise ValueError(f"refit_model needs a one-step recipe; {recipe.source} has {len(recipe.steps)} steps: the lot's measured rate "
+                         "is the mean over the steps, whose mix changes with the controlled step's time, and the refit would read that "
+                         "change as glazing")
     if resume and checkpoint is None:
         raise ValueError("resume needs the checkpoint to resume from (cmpsim lot --resume needs --out DIR)")
     target = recipe.target.remaining

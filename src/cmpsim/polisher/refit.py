@@ -17,10 +17,11 @@ model's parameters from the plant's past, then control as if they were true):
   from W = 0), so W_j(k_w) = (k_w / k_0) W_j(k_0): each wafer is walked once, as it comes, at the
   model's starting constants (:class:`History`), and every trial k_w is a scale on the samples; G_c
   enters eq. L4 only. k_w by bounded Brent, G_c by the profile of S over it.
-- (C7) a refit is taken only when the data identify it: at least 3 rates for k_w (one degree of
-  freedom), 4 for k_w and G_c; the minimum inside [1/100, 100] times the model's starting
-  constants; the 95 % half-width of each logarithm, 1.96 sqrt(diag(2 s^2 H^-1)) with
-  s^2 = S_min / dof and H the Hessian of S, below ln 2 (known within a factor 2). Both constants
+- (C7) a refit is taken only when the data identify it: at least 4 rates for k_w (two degrees of
+  freedom), 5 for k_w and G_c; the minimum inside [1/100, 100] times the model's starting
+  constants and inside the constant's valid range; the 95 % half-width of each logarithm,
+  t_{0.975, dof} sqrt(diag(2 s^2 H^-1)) with s^2 = S_min / dof, H the Hessian of S and Student's t
+  (the scatter is estimated from the same few rates), below ln 2 (known within a factor 2). Both constants
   when both pass, else k_w alone when it passes, else the model keeps its constants (a pad in its
   in-situ balance: every f_j alike, S flat).
 - (C8) with new constants the controller's model takes the state and the pad ages of the wafers
@@ -39,13 +40,15 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..physics.padlife import CALIBRATION, PadLifeState, summit_constants
+from ..physics.padlife import CALIBRATION, GLAZING_CONSTANTS, PadLifeState, summit_constants
 from .pad import PadLife, wear_samples
 
 __all__ = ["Seen", "RefitState", "History", "refit", "walk", "refitted_model", "starting_model", "MIN_RATES", "IDENTIFIED", "SPAN"]
 
-#: C7: the fewest measured rates a refit of k_w takes (the level and k_w fitted, one degree of freedom left); one more for G_c.
-MIN_RATES = 3
+#: C7: the fewest measured rates a refit of k_w takes (the level and k_w fitted, two degrees of freedom left: with one,
+#: the scatter estimated from three rates is too uncertain and the accepted refits' intervals missed the truth in 20-46 %
+#: of noisy trials); one more for G_c.
+MIN_RATES = 4
 #: C7: the largest 95 % half-width of the logarithm of a refitted constant (known within a factor 2).
 IDENTIFIED = math.log(2.0)
 #: C7: each constant is looked for within [1/SPAN, SPAN] times the model's starting one.
@@ -56,7 +59,8 @@ SPAN = 100.0
 class Seen:
     """One wafer as the controller saw it: its steps' ``durations`` (s), the ``zone_pressures`` it ran
     at (Pa; None: the recipe's) and its measured mean ``rate`` over the zone pressure factor (m/s; None
-    for a monitor wafer whose rate did not seed the controller)."""
+    for a monitor wafer whose rate did not seed the controller). A rate that is not > 0 (a wafer that
+    removed nothing as measured) is kept but not fitted."""
 
     durations: tuple
     zone_pressures: tuple | None = None
@@ -214,10 +218,10 @@ def refit(state: RefitState, model: PadLife, recipe, overrides: dict, time_step:
     """C6-C7: ``state`` with the constants the rates seen identify (or kept, saying why in ``last``);
     ``model`` the controller's pad-life model (its k_w and G_c are taken from ``state``); ``history``
     the :class:`History` of the wafers walked so far (extended here; None: walked from the start)."""
-    rated = [j for j, w in enumerate(state.wafers) if w.rate is not None]
+    rated = [j for j, w in enumerate(state.wafers) if w.rate is not None and math.isfinite(w.rate) and w.rate > 0]
     n = len(rated)
     if n < MIN_RATES:
-        return replace(state, last={"refit": False, "why": f"{n} rate(s) measured, a refit needs {MIN_RATES}"})
+        return replace(state, last={"refit": False, "why": f"{n} rate(s) > 0 measured, a refit needs {MIN_RATES}"})
     gc_now = state.critical_glazed_area
     history = (History() if history is None else history).extend(starting_model(model, state), recipe, overrides, state.wafers,
                                                                   time_step, idle_time)
@@ -232,22 +236,23 @@ def refit(state: RefitState, model: PadLife, recipe, overrides: dict, time_step:
         e = rates - np.log(history.means(1.0 / (1.0 + glazed[u] / gc))[rated])  # eq. L4, each wafer's time mean
         return float(np.sum((e - e.mean()) ** 2))
 
-    lo, hi = -math.log(SPAN), math.log(SPAN)
+    ku = _bounds("pad_wear_coefficient", state.start)  # ln of the constant over its start: [1/SPAN, SPAN] within its valid range
+    gv = _bounds("critical_glazed_area", state.start_glazed_area)
     v_now = math.log(gc_now / state.start_glazed_area)
-    u, s_min, curvature = _fit(lambda x: spread(x, v_now), lo, hi)
-    one = _verdict("k_w", [u], [curvature], s_min, n - 2, lo, hi)
+    u, s_min, curvature = _fit(lambda x: spread(x, v_now), *ku)
+    one = _verdict("k_w", [u], [curvature], s_min, n - 2, [ku])
     both = None
     if n >= MIN_RATES + 1:  # k_w and G_c together (the profile over G_c at each k_w), when the rates identify both
         inner = {}
 
         def profile(x: float) -> float:
-            inner[x] = _fit(lambda y: spread(x, y), lo, hi)[:2]
+            inner[x] = _fit(lambda y: spread(x, y), *gv)[:2]
             return inner[x][1]
 
-        u2, s2, _ = _fit(profile, lo, hi)
-        v2 = inner[u2][0] if u2 in inner else _fit(lambda y: spread(u2, y), lo, hi)[0]
+        u2, s2, _ = _fit(profile, *ku)
+        v2 = inner[u2][0] if u2 in inner else _fit(lambda y: spread(u2, y), *gv)[0]
         s2 = spread(u2, v2)
-        both = _verdict("k_w and G_c", [u2, v2], _hessian(spread, u2, v2), s2, n - 3, lo, hi)
+        both = _verdict("k_w and G_c", [u2, v2], _hessian(spread, u2, v2), s2, n - 3, [ku, gv])
     k, gc = state.wear_coefficient, state.critical_glazed_area
     if both is not None and both["why"] is None:
         k, gc = state.start * math.exp(u2), state.start_glazed_area * math.exp(v2)
@@ -270,17 +275,27 @@ def _hessian(spread, u: float, v: float, h: float = 0.05) -> np.ndarray:
     return np.array([[uu, uv], [uv, vv]])
 
 
-def _verdict(what: str, x, curvature, s_min: float, dof: int, lo: float, hi: float) -> dict:
-    """C7 on a fit at ``x`` (ln of the constants over their starts) with the Hessian of S there
-    (``curvature``: the second derivative, or the 2 x 2 matrix): the 95 % half-widths, and why the fit
-    is not taken (None: taken)."""
+def _bounds(name: str, start: float) -> tuple[float, float]:
+    """The search interval of ln(constant / ``start``) (C7): [1/SPAN, SPAN] times the start, within the
+    constant's valid range (:data:`cmpsim.physics.padlife.GLAZING_CONSTANTS`)."""
+    low, high = GLAZING_CONSTANTS[name][1]
+    return max(-math.log(SPAN), math.log(low / start)), min(math.log(SPAN), math.log(high / start))
+
+
+def _verdict(what: str, x, curvature, s_min: float, dof: int, bounds) -> dict:
+    """C7 on a fit at ``x`` (ln of the constants over their starts, each within its ``bounds`` (lo, hi))
+    with the Hessian of S there (``curvature``: the second derivative, or the 2 x 2 matrix): the 95 %
+    half-widths (Student's t of ``dof`` degrees of freedom: the scatter s^2 is estimated from the same
+    few rates), and why the fit is not taken (None: taken)."""
+    from scipy.stats import t as student
+
     H = np.atleast_2d(np.asarray(curvature, dtype=float))
     half = np.full(len(x), math.inf)
-    if dof > 0 and np.all(np.linalg.eigvalsh(H) > 0):
-        half = 1.96 * np.sqrt(np.diag(2.0 * (s_min / dof) * np.linalg.inv(H)))
+    if dof > 0 and math.isfinite(s_min) and np.all(np.isfinite(H)) and np.all(np.linalg.eigvalsh(H) > 0):
+        half = float(student.ppf(0.975, dof)) * np.sqrt(np.diag(2.0 * (s_min / dof) * np.linalg.inv(H)))
     why = None
-    if any(min(xi - lo, hi - xi) < 1e-3 for xi in x):
-        why = f"the best {what} lies on the bound of [1/{SPAN:g}, {SPAN:g}] times the model's own"
+    if any(min(xi - lo, hi - xi) < 1e-3 for xi, (lo, hi) in zip(x, bounds)):
+        why = f"the best {what} lies on a bound ([1/{SPAN:g}, {SPAN:g}] times the model's own, within the valid range)"
     elif not np.all(half < IDENTIFIED):
         why = f"{what} not identified: 95 % half-width of the logarithm {', '.join(f'{h:.3g}' for h in half)}, not all < ln 2"
     return {"half_width": [float(h) for h in half], "why": why}
