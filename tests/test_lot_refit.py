@@ -140,16 +140,15 @@ def test_the_history_walks_as_the_controller_and_its_replay_is_the_filter_from_t
 
     from cmpsim.physics.padlife import PadLifeState
     from cmpsim.polisher.control import make_estimator
-    from cmpsim.polisher.lot import _refitted
     from cmpsim.polisher.pad import wear_through
-    from cmpsim.polisher.refit import History, starting_model
+    from cmpsim.polisher.refit import History, replay, starting_model
 
     recipe, model, state, lot = _history(FASTER, [60, 90, 120, 150, 180])
     for w in lot:
         state = state.seen(w)
     state = _replace(state, wear_coefficient=2 * state.start, critical_glazed_area=0.6 * state.start_glazed_area)
     history = History().extend(starting_model(model, state), recipe, COARSE, state.wafers, 1.0, 30.0)
-    new, estimator, life = _refitted(state, history, model, "ewma", 0.3, 0.3, "glazing", "model")
+    new, estimator, life = replay(state, history, model, "ewma", 0.3, 0.3, "glazing", "model")
     config = recipe.step_config(recipe.steps[0], COARSE)
     ages, walked = [], PadLifeState()
     for w in state.wafers:

@@ -44,9 +44,9 @@ from .checkpoint import (LotCheckpoint, digest, life_from_dict, life_to_dict, pa
 from .control import CONTROL, DRIFT_WEIGHT, WEIGHT, estimator_from_dict, feed_forward_time, make_estimator
 from .engine import PadState, idle, polish
 from .incoming import incoming_profiles, measurement_errors
-from .pad import GlazingClock, PadLife, mean_factor, time_mean, wear_through
+from .pad import GlazingClock, PadLife, mean_factor, sliding_speed, time_mean, wear_through
 from .recipe import RecipeError, load_recipe
-from .refit import History, RefitState, Seen, refit, refitted_model
+from .refit import History, RefitState, Seen, refit, refitted_model, replay
 from .lotresult import LotResult, WaferRecord, lot_csv, write_lot
 from .zones import ZoneFeedback, ZoneState
 
@@ -303,6 +303,7 @@ def run_lot(
                                                     np.asarray(setup["metrology"]["final"], dtype=float))
     others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
     start_pressures = tuple(setup["start_pressures"])
+    preston = _preston_weights(recipe, step_k, overrides) if controlled else {}  # C0': the other steps' removal, in controlled-step seconds
 
     for k in range(start, wafers):
         inc = profiles[k]
@@ -311,21 +312,23 @@ def run_lot(
         if errors is not None:
             seen_in = inc + errors[0][k]
             seen_in_mean = float(np.sum(weights * seen_in))
-        wafer_recipe, ov = recipe, dict(overrides)
+        wafer_recipe, ov, zoned = recipe, dict(overrides), None
         plan, predicted = None, None
         if polish_times is not None:  # a logged lot, replayed
-            wafer_recipe = _with_step_time(recipe, replay_k, polish_times[k])
+            wafer_recipe = recipe.with_step_time(replay_k, polish_times[k])
             if polish_zone_pressures is not None:
-                ov["zone_pressures"] = polish_zone_pressures[k]
+                zoned = ov["zone_pressures"] = polish_zone_pressures[k]
         if controlled:
-            pressures = start_pressures
-            if feedback is not None:
+            pressures, zoned_recipe = start_pressures, recipe
+            if feedback is not None:  # the zone pressures of the controlled step (the other steps keep their own pressures)
                 plan = feedback.plan(zones, seen_in, float(target))
-                pressures = plan.pressures
-                ov["zone_pressures"] = pressures
+                pressures = zoned = plan.pressures
+                zoned_recipe = recipe.with_step_zones(step_k, pressures)
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
-            predicted, t, wafer_recipe = _next_wafer(recipe, step_k, ov, estimator, factor, seen_in_mean, float(target), k + 1, model_life,
-                                                     model, time_step)
+            before = records[-1].step_times if records and records[-1].step_times else setup.get("first_durations")
+            other = _other_time(recipe, preston, before)
+            predicted, t, wafer_recipe = _next_wafer(zoned_recipe, step_k, ov, estimator, factor, seen_in_mean, float(target), k + 1,
+                                                     model_life, model, time_step, other)
         result = polish(wafer_recipe, overrides=ov, pad_state=pad_state, incoming=(radius, [inc, *others]), time_step=time_step,
                         pad_life=life_model, cache=cache)
         solves += result.solves
@@ -333,7 +336,7 @@ def run_lot(
         final = np.asarray(result.final.thickness[0], dtype=float)
         seen_out = final if errors is None else final + errors[1][k]  # the post-polish profile as measured
         removed = seen_in_mean - float(np.sum(weights * seen_out))  # the removal the controller sees
-        pressures = tuple(ov.get("zone_pressures", start_pressures))
+        pressures = tuple(zoned) if zoned is not None else start_pressures
         record = WaferRecord(
             index=k + 1,
             polish_time=float(total_time),
@@ -350,6 +353,7 @@ def run_lot(
             predicted_rate=predicted,
             predicted_nonuniformity=None if plan is None else plan.nu_after,
             zone_step=None if plan is None else plan.decision,
+            step_times=tuple(float(r.duration) for r in result.steps),
         )
         records.append(record)
         pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
@@ -358,16 +362,19 @@ def run_lot(
         if controlled and total_time > 0:
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
             age = model_age if estimator.clock == "glazing" else float(k + 1)
-            estimator = estimator.update(removed / total_time / factor, age)
+            if preston:  # C0': the removal over the controlled step's time at its zone factor and the others' Preston-weighted times
+                rate = removed / (factor * result.steps[step_k].duration + _other_time(recipe, preston, record.step_times, done=True))
+            else:
+                rate = removed / total_time / factor
+            estimator = estimator.update(rate, age)
             if feedback is not None:
                 zones = feedback.learn(zones, pressures, (seen_in - seen_out) / total_time)
         if refit_state is not None:  # C6-C8: the controller refits its model's k_w to the rates it measured
-            seen = Seen(tuple(float(r.duration) for r in result.steps), ov.get("zone_pressures"),
-                        removed / total_time / factor if total_time > 0 else None)
+            seen = Seen(record.step_times, zoned, removed / total_time / factor if total_time > 0 else None)
             before = (refit_state.wear_coefficient, refit_state.critical_glazed_area)
             refit_state = refit(refit_state.seen(seen), model, recipe, overrides, time_step, idle_time, history)
             if (refit_state.wear_coefficient, refit_state.critical_glazed_area) != before:
-                model, estimator, model_life = _refitted(refit_state, history, model, control, weight, drift_weight, clock, drift_prior)
+                model, estimator, model_life = replay(refit_state, history, model, control, weight, drift_weight, clock, drift_prior)
             record = records[-1] = replace(record, model_wear_coefficient=refit_state.wear_coefficient,
                                            model_critical_glazed_area=refit_state.critical_glazed_area)
         saved = LotCheckpoint(inputs, k + 1, setup, pad_state_to_dict(pad_state), _dict(estimator), _dict(zones),
@@ -384,16 +391,20 @@ def run_lot(
                      if controlled else None)
 
 
-def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, index, life, life_model, time_step):
+def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, index, life, life_model, time_step, other=0.0):
     """The controlled wafer: its predicted rate (m/s; eq. C4 at its pad age, times Z6), polish time
-    (s; eq. C0) and recipe. On the glazing clock the wafer's age depends on its own polish time:
-    the fixed point t = (incoming - target) / (rate at the age of a wafer of t), iterated to 1e-9 s."""
+    (s; eq. C0, less the ``other`` steps' removal in controlled-step seconds, C0') and recipe. On the
+    glazing clock the wafer's age depends on its own polish time: the fixed point
+    t = (incoming - target) / (rate at the age of a wafer of t), iterated to 1e-9 s."""
     def with_time(t):
-        return _with_step_time(recipe, step_k, t)
+        return recipe.with_step_time(step_k, t)
+
+    def time_for(predicted):
+        return max(feed_forward_time(predicted, inc_mean, target) - other / factor, time_step)
 
     if estimator.clock != "glazing":
         predicted = _prediction(estimator, float(index), factor, index)
-        t = max(feed_forward_time(predicted, inc_mean, target), time_step)
+        t = time_for(predicted)
         return predicted, t, with_time(t)
     configs = [recipe.step_config(s, overrides) for s in recipe.steps]
     if len(configs) == 1:  # the pad's states along the step computed once for all trial times
@@ -402,11 +413,11 @@ def _next_wafer(recipe, step_k, overrides, estimator, factor, inc_mean, target, 
         def clock(t):
             return mean_factor(life_model, list(zip(configs, [t if j == step_k else s.limit for j, s in enumerate(recipe.steps)])), life,
                                time_step)
-    t = max(feed_forward_time(_prediction(estimator, estimator.age, factor, index), inc_mean, target), time_step)
+    t = time_for(_prediction(estimator, estimator.age, factor, index))
     for _ in range(AGE_ITERATIONS):
         age = clock(t)
         predicted = _prediction(estimator, age, factor, index)
-        new = max(feed_forward_time(predicted, inc_mean, target), time_step)
+        new = time_for(predicted)
         done = abs(new - t) <= 1e-9
         t = new
         if done:
@@ -422,24 +433,22 @@ def _model_through(model: PadLife, recipe, overrides, result, life, time_step: f
     return age, model.idle(life, idle_time)
 
 
-def _refitted(state: RefitState, history: History, model: PadLife, control, weight, drift_weight, clock, drift_prior):
-    """C8: the controller's model with the refitted constants, its filter replayed from the seed over the
-    rates measured at the pad ages the refitted model gives the wafers, and its state now."""
-    scale = state.wear_coefficient / state.start
-    ages = history.ages(scale, state.critical_glazed_area)
-    seed_age = float(ages[state.monitors - 1]) if state.monitors else 1.0  # a fresh pad's factor without monitor wafers
-    estimator = make_estimator(control, state.seed_rate, weight, drift_weight, clock, seed_age, drift_prior)
-    for w, age in list(zip(state.wafers, ages))[state.monitors:]:
-        if w.rate is not None:
-            estimator = estimator.update(w.rate, float(age))
-    return refitted_model(model, state), estimator, history.state(scale)
+def _preston_weights(recipe, step_k: int, overrides) -> dict:
+    """C0': each other step's P U over the controlled step's (nominal pressures, the pad's speed under the
+    wafer centre), {step index: weight}: the removal of a second of it in seconds of the controlled step."""
+    pu = [float(c.applied_pressure) * sliding_speed(c) for c in (recipe.step_config(s, overrides) for s in recipe.steps)]
+    return {j: pu[j] / pu[step_k] for j in range(len(pu)) if j != step_k}
 
 
-def _with_step_time(recipe, step_k: int, t: float):
-    """``recipe`` with step ``step_k`` polished for ``t`` s."""
-    steps = list(recipe.steps)
-    steps[step_k] = replace(steps[step_k], time=t)
-    return replace(recipe, steps=tuple(steps))
+def _other_time(recipe, weights: dict, durations, done: bool = False) -> float:
+    """C0': the other steps' Preston-weighted time (s of the controlled step): their ``durations`` as run
+    (``done``), or before the wafer their set times, an end-pointed step the last wafer's (else its limit)."""
+    total = 0.0
+    for j, w in weights.items():
+        s = recipe.steps[j]
+        d = durations[j] if (done or s.until != "time") and durations else s.limit
+        total += w * float(d)
+    return total
 
 
 def _prediction(estimator, age: float, factor: float, index: int) -> float:
@@ -487,6 +496,7 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
         first = polish(recipe, overrides=overrides, time_step=time_step, cache=cache)
         solves = first.solves
     first_time = sum(s.duration for s in first.steps)
+    first_durations = [float(s.duration) for s in first.steps]  # an end-pointed step's first expected time (C0')
     first_removed = first.initial.mean_thickness(0) - first.final.mean_thickness(0)
     qualified = None if not qualification else {
         "wafers": int(qualification), "polish_time": float(first_time),
@@ -510,7 +520,11 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
     estimator = feedback = zones = None
     if controlled:
         age = model_age if clock == "glazing" else 0.0  # the monitor wafer's age in the controller's model (a fresh pad: 1)
-        estimator = make_estimator(control, first_removed / first_time, weight, drift_weight, clock, age, drift_prior)
+        seen = first_time
+        if len(recipe.steps) > 1:  # C0': the monitor's removal over its controlled-step-equivalent time, as the lot's wafers are read
+            k = _controlled_step(recipe)
+            seen = first.steps[k].duration + _other_time(recipe, _preston_weights(recipe, k, overrides), first_durations, done=True)
+        estimator = make_estimator(control, first_removed / seen, weight, drift_weight, clock, age, drift_prior)
         if zoned and zone_feedback:
             from ..head.zone_response import ZoneSolver, profile_of, response_matrix
 
@@ -528,7 +542,7 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
             zones = ZoneState(feedback.start_pressures, measured / float(weights @ measured))  # the first shape: the monitor wafer's
     setup = {"radius": radius.tolist(), "weights": weights.tolist(), "profiles": profiles.tolist(), "qualification": qualified,
              "start_pressures": [float(p) for p in start_pressures], "feedback": None if feedback is None else _feedback_to_dict(feedback),
-             "monitor_durations": monitors}
+             "monitor_durations": monitors, "first_durations": first_durations}
     return setup, pad_state, estimator, zones, feedback, solves, (model_life if controlled else None)
 
 

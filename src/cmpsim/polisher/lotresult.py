@@ -19,6 +19,7 @@ UNITS = {
     "controller.weight": "1", "controller.drift_weight": "1", "controller.zone_weight": "1",
     "model_wear_coefficient": "1/Pa (the controller's pad-life model, refitted)",
     "model_critical_glazed_area": "1 (the controller's pad-life model, refitted)",
+    "step_times": "s (each step's polish time)",
 }
 
 
@@ -50,6 +51,8 @@ class WaferRecord:
     model_wear_coefficient: float | None = None
     #: 1: the critical glazed area G_c of the controller's pad-life model after the wafer (``refit_model``); None without it
     model_critical_glazed_area: float | None = None
+    #: s: each step's polish time on the wafer, in the recipe's order (None: not recorded)
+    step_times: tuple | None = None
 
     def to_record(self) -> dict:
         """Every field as JSON-able values (the checkpoint's record; floats round-trip exactly)."""
@@ -61,6 +64,8 @@ class WaferRecord:
         """The inverse of :meth:`to_record`."""
         d = dict(data)
         d["zone_pressures"] = tuple(d["zone_pressures"])
+        if d.get("step_times") is not None:
+            d["step_times"] = tuple(d["step_times"])
         d["radius"] = np.asarray(d["radius"], dtype=float)
         d["final_thickness"] = np.asarray(d["final_thickness"], dtype=float)
         return cls(**d)
@@ -82,6 +87,7 @@ class WaferRecord:
             "zone_step": self.zone_step,
             "model_wear_coefficient": self.model_wear_coefficient,
             "model_critical_glazed_area": self.model_critical_glazed_area,
+            "step_times": None if self.step_times is None else list(self.step_times),
         }
 
 

@@ -34,7 +34,7 @@ from __future__ import annotations
 import math
 import re
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..inputs.config import PARAMETERS, PRESETS, Config
@@ -140,6 +140,20 @@ class Recipe:
             return cfg.replace(**own)
         except ValueError as exc:
             raise RecipeError(f"{self.source}: {step.label}: {exc}") from None
+
+    def with_step_time(self, k: int, t: float) -> "Recipe":
+        """This recipe with step ``k`` (0-based) polished for ``t`` s (a lot's controlled or logged time)."""
+        steps = list(self.steps)
+        steps[k] = replace(steps[k], time=t)
+        return replace(self, steps=tuple(steps))
+
+    def with_step_zones(self, k: int, pressures) -> "Recipe":
+        """This recipe with step ``k`` (0-based) polished at the zone ``pressures`` (Pa; its own pressure, if it
+        sets one, replaced): a lot's zone feedback on its controlled step, the other steps keeping theirs."""
+        steps = list(self.steps)
+        own = tuple((n, v) for n, v in steps[k].inputs if n not in ("applied_pressure", "zone_pressures"))
+        steps[k] = replace(steps[k], inputs=own + (("zone_pressures", tuple(float(p) for p in pressures)),))
+        return replace(self, steps=tuple(steps))
 
     @property
     def film_names(self) -> tuple:

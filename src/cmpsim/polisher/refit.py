@@ -41,9 +41,10 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..physics.padlife import CALIBRATION, GLAZING_CONSTANTS, PadLifeState, summit_constants
+from .control import make_estimator
 from .pad import PadLife, wear_samples
 
-__all__ = ["Seen", "RefitState", "History", "refit", "walk", "refitted_model", "starting_model", "MIN_RATES", "IDENTIFIED", "SPAN"]
+__all__ = ["Seen", "RefitState", "History", "refit", "walk", "refitted_model", "starting_model", "replay", "MIN_RATES", "IDENTIFIED", "SPAN"]
 
 #: C7: the fewest measured rates a refit of k_w takes (the level and k_w fitted, two degrees of freedom left: with one,
 #: the scatter estimated from three rates is too uncertain and the accepted refits' intervals missed the truth in 20-46 %
@@ -299,3 +300,18 @@ def _verdict(what: str, x, curvature, s_min: float, dof: int, bounds) -> dict:
     elif not np.all(half < IDENTIFIED):
         why = f"{what} not identified: 95 % half-width of the logarithm {', '.join(f'{h:.3g}' for h in half)}, not all < ln 2"
     return {"half_width": [float(h) for h in half], "why": why}
+
+
+def replay(state: RefitState, history: History, model: PadLife, control: str, weight: float, drift_weight: float, clock: str,
+           drift_prior: str):
+    """C8: (the controller's ``model`` with the refitted constants of ``state``, its double EWMA replayed from
+    the seed over the rates measured at the pad ages the refitted model gives the wafers (eqs. C2-C3, with
+    the lot's weights, clock and drift prior), the model's pad-life state now)."""
+    scale = state.wear_coefficient / state.start
+    ages = history.ages(scale, state.critical_glazed_area)
+    seed_age = float(ages[state.monitors - 1]) if state.monitors else 1.0  # a fresh pad's factor without monitor wafers
+    estimator = make_estimator(control, state.seed_rate, weight, drift_weight, clock, seed_age, drift_prior)
+    for w, age in list(zip(state.wafers, ages))[state.monitors:]:
+        if w.rate is not None:
+            estimator = estimator.update(w.rate, float(age))
+    return refitted_model(model, state), estimator, history.state(scale)
