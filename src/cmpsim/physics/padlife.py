@@ -109,6 +109,11 @@ class FreshPad:
             raise ValueError(f"FreshPad.critical_glazed_area must be finite and >= 0; got {self.critical_glazed_area!r}")
 
     @property
+    def critical_area(self) -> float:
+        """G_c in effect for this pad (1, eq. L4): its own, or the calibrated default when 0."""
+        return self.critical_glazed_area or float(CALIBRATION["critical_glazed_area"])
+
+    @property
     def volume_scale(self) -> float:
         """eta pi R sigma^2, m: the worn volume per area that moves the front by about one sigma near the mean."""
         return self.density * math.pi * self.radius * self.sigma**2
@@ -306,7 +311,7 @@ def summit_constants(state: PadLifeState, pad: FreshPad | None = None) -> Summit
     G = 2.0 * math.pi * p.density * p.radius * p.sigma * flat_area(zf, p.cutoff)
     one = np.ones_like(zf)
     return SummitConstants(sigma=std / std0, density=one, radius=one, cutoff=zf, mean_shift=mean0 - mean,
-                           glazed_summits=glazed, glazed_area=G, rate_factor=rate_factor(G, p.critical_glazed_area or None))
+                           glazed_summits=glazed, glazed_area=G, rate_factor=rate_factor(G, p.critical_area))
 
 
 # ----------------------------------------------------------------------------- data and calibration

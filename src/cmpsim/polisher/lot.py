@@ -266,10 +266,11 @@ def run_lot(
         return PadState(cooled.thermal, life_model.idle(result.pad_state.life, idle_time), cooled.time)
 
     cache = {} if cache is None else cache  # the step solves of the last wafer: a wafer with the same inputs is not solved again
+    preston = _preston_weights(recipe, step_k, overrides) if controlled else {}  # C0': the other steps' removal, in controlled-step seconds
     saved = read_checkpoint(checkpoint, inputs) if resume else None
     if saved is None:
         setup, pad_state, estimator, zones, feedback, solves, model_life = _set_up(
-            recipe, wafers, controlled, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers, cache,
+            recipe, wafers, step_k, preston, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers, cache,
             weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior, model, idle_time)
         refit_state = None
         if refit_model:  # the controller's memory for its refits: the monitor wafers, the last one's rate its seed
@@ -303,7 +304,6 @@ def run_lot(
                                                     np.asarray(setup["metrology"]["final"], dtype=float))
     others = [np.full(radius.shape, f.thickness) for f in recipe.films[1:]]
     start_pressures = tuple(setup["start_pressures"])
-    preston = _preston_weights(recipe, step_k, overrides) if controlled else {}  # C0': the other steps' removal, in controlled-step seconds
 
     for k in range(start, wafers):
         inc = profiles[k]
@@ -359,18 +359,19 @@ def run_lot(
         pad_state = between_wafers(result)  # worn while polishing (conditioned in situ); idle: cooled, conditioned ex situ
         if controlled:  # the controller's model of the pad follows the wafer's steps as they ran (their logged times)
             model_age, model_life = _model_through(model, wafer_recipe, ov, result, model_life, time_step, idle_time)
+        rate = None  # the rate the controller reads off the wafer (m/s)
         if controlled and total_time > 0:
             factor = feedback.pressure_factor(pressures) if feedback is not None else 1.0
             age = model_age if estimator.clock == "glazing" else float(k + 1)
             if preston:  # C0': the removal over the controlled step's time at its zone factor and the others' Preston-weighted times
-                rate = removed / (factor * result.steps[step_k].duration + _other_time(recipe, preston, record.step_times, done=True))
+                rate = removed / _removal_time(recipe, step_k, preston, record.step_times, factor)
             else:
                 rate = removed / total_time / factor
             estimator = estimator.update(rate, age)
             if feedback is not None:
                 zones = feedback.learn(zones, pressures, (seen_in - seen_out) / total_time)
         if refit_state is not None:  # C6-C8: the controller refits its model's k_w to the rates it measured
-            seen = Seen(record.step_times, zoned, removed / total_time / factor if total_time > 0 else None)
+            seen = Seen(record.step_times, zoned, rate)
             before = (refit_state.wear_coefficient, refit_state.critical_glazed_area)
             refit_state = refit(refit_state.seen(seen), model, recipe, overrides, time_step, idle_time, history)
             if (refit_state.wear_coefficient, refit_state.critical_glazed_area) != before:
@@ -440,6 +441,12 @@ def _preston_weights(recipe, step_k: int, overrides) -> dict:
     return {j: pu[j] / pu[step_k] for j in range(len(pu)) if j != step_k}
 
 
+def _removal_time(recipe, step_k: int, weights: dict, durations, factor: float = 1.0) -> float:
+    """C0': a polished wafer's time in seconds of its controlled step (``durations`` its steps' times, s):
+    the controlled step's at its zone ``factor`` (Z6) plus the other steps' Preston-weighted times."""
+    return factor * durations[step_k] + _other_time(recipe, weights, durations, done=True)
+
+
 def _other_time(recipe, weights: dict, durations, done: bool = False) -> float:
     """C0': the other steps' Preston-weighted time (s of the controlled step): their ``durations`` as run
     (``done``), or before the wafer their set times, an end-pointed step the last wafer's (else its limit)."""
@@ -476,11 +483,13 @@ def _dict(state):
     return None if state is None else state.to_dict()
 
 
-def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers,
+def _set_up(recipe, wafers, step_k, preston, control, seed, overrides, incoming, base, time_step, qualification, life_model, between_wafers,
             cache, weight, drift_weight, zone_weight, zone_feedback, clock, drift_prior, model, idle_time):
     """The lot before its first wafer: the monitor wafers (or the fresh pad's prediction), the rings,
     the incoming profiles, the first rate estimate, the zone response and the first shape; and the
-    controller's ``model`` of the pad's life through the monitor wafers (its state after them)."""
+    controller's ``model`` of the pad's life through the monitor wafers (its state after them). ``step_k``:
+    the controlled step (None: no control); ``preston``: the other steps' weights of C0'."""
+    controlled = step_k is not None
     pad_state = PadState(life=PadLifeState())
     model_life, model_age = PadLifeState(), 1.0
     monitors = []  # each monitor wafer's step durations (s)
@@ -520,10 +529,8 @@ def _set_up(recipe, wafers, controlled, control, seed, overrides, incoming, base
     estimator = feedback = zones = None
     if controlled:
         age = model_age if clock == "glazing" else 0.0  # the monitor wafer's age in the controller's model (a fresh pad: 1)
-        seen = first_time
-        if len(recipe.steps) > 1:  # C0': the monitor's removal over its controlled-step-equivalent time, as the lot's wafers are read
-            k = _controlled_step(recipe)
-            seen = first.steps[k].duration + _other_time(recipe, _preston_weights(recipe, k, overrides), first_durations, done=True)
+        # C0': the monitor's removal over its time in controlled-step seconds, as the lot's wafers are read (one step: its time)
+        seen = _removal_time(recipe, step_k, preston, first_durations) if preston else first_time
         estimator = make_estimator(control, first_removed / seen, weight, drift_weight, clock, age, drift_prior)
         if zoned and zone_feedback:
             from ..head.zone_response import ZoneSolver, profile_of, response_matrix

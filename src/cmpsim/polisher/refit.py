@@ -40,7 +40,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from ..physics.padlife import CALIBRATION, GLAZING_CONSTANTS, PadLifeState, summit_constants
+from ..physics.padlife import GLAZING_CONSTANTS, PadLifeState, summit_constants
 from .control import make_estimator
 from .pad import PadLife, wear_samples
 
@@ -100,8 +100,8 @@ class RefitState:
         """The memory before the lot's first wafer: ``model``'s constants at the step ``config``, the
         seed and the monitor wafers (:class:`Seen`)."""
         pad = model.at(config).pad
-        gc = pad.critical_glazed_area or float(CALIBRATION["critical_glazed_area"])
-        return cls(pad.wear_coefficient, gc, pad.wear_coefficient, gc, float(seed_rate), len(monitors), tuple(monitors))
+        return cls(pad.wear_coefficient, pad.critical_area, pad.wear_coefficient, pad.critical_area, float(seed_rate), len(monitors),
+                   tuple(monitors))
 
     @property
     def moved(self) -> bool:
@@ -124,8 +124,12 @@ class RefitState:
 
 def refitted_model(model: PadLife, state: RefitState) -> PadLife:
     """The controller's ``model`` with the constants of ``state`` (k_w 1/Pa, G_c 1)."""
-    return replace(model, constants={**(model.constants or {}), "pad_wear_coefficient": float(state.wear_coefficient),
-                                     "critical_glazed_area": float(state.critical_glazed_area)})
+    return _with_constants(model, state.wear_coefficient, state.critical_glazed_area)
+
+
+def _with_constants(model: PadLife, wear_coefficient: float, critical_glazed_area: float) -> PadLife:
+    return replace(model, constants={**(model.constants or {}), "pad_wear_coefficient": float(wear_coefficient),
+                                     "critical_glazed_area": float(critical_glazed_area)})
 
 
 def _steps(recipe, overrides: dict, wafer: Seen):
@@ -194,13 +198,12 @@ def walk(model: PadLife, recipe, overrides: dict, wafers, time_step: float, idle
     ``idle_time`` s idle): (each wafer's pad age on the glazing clock, eq. L4, the model's state after them)."""
     history = History().extend(model, recipe, overrides, wafers, time_step, idle_time)
     pad = next(iter(history.pads))
-    return history.ages(1.0, pad.critical_glazed_area or float(CALIBRATION["critical_glazed_area"])), history.state(1.0)
+    return history.ages(1.0, pad.critical_area), history.state(1.0)
 
 
 def starting_model(model: PadLife, state: "RefitState") -> PadLife:
     """The controller's ``model`` with its constants before any refit (those :class:`History` walks at)."""
-    return replace(model, constants={**(model.constants or {}), "pad_wear_coefficient": float(state.start),
-                                     "critical_glazed_area": float(state.start_glazed_area)})
+    return _with_constants(model, state.start, state.start_glazed_area)
 
 
 def _fit(spread, lo: float, hi: float):
