@@ -143,16 +143,12 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
             unc = _length(rec, "uncertainty", unit, where)
             if not unc > 0:
                 raise LotDataError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")
-        t = None
-        if rec.get("time"):
-            from ..inputs.units import to_si
+        from .measurements import MeasurementError, read_polish_time
 
-            try:
-                t = float(to_si(rec["time"], "s", "column 'time'", "62 s"))
-            except ValueError as exc:
-                raise LotDataError(f"{where}: {exc}") from None
-            if not (math.isfinite(t) and t > 0):
-                raise LotDataError(f"{where}: column 'time' = {rec['time']!r} must be a polish time > 0 s")
+        try:
+            t = read_polish_time(rec, where)
+        except MeasurementError as exc:
+            raise LotDataError(str(exc)) from None
         zp = None
         if rec.get("zone_pressures"):
             from ..inputs.units import parse_list

@@ -36,7 +36,7 @@ import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["MeasurementError", "StructureRecord", "ThermalRecord", "read_measurements", "STRUCTURE_QUANTITIES",
+__all__ = ["MeasurementError", "StructureRecord", "ThermalRecord", "read_measurements", "read_polish_time", "STRUCTURE_QUANTITIES",
            "THERMAL_QUANTITIES", "shipped_measurement_paths"]
 
 #: Test-structure quantities: name -> (SI unit, meaning).
@@ -156,8 +156,9 @@ def _length(rec, column, where, required=False, positive=True):
     return v
 
 
-def _polish_time(rec: dict, where: str) -> float | None:
-    """The row's ``time`` (s; None where the cell is empty); MeasurementError naming the column unless it is > 0 s."""
+def read_polish_time(rec: dict, where: str) -> float | None:
+    """The row's ``time`` (s; None where the cell is empty); MeasurementError naming the column unless it is > 0 s
+    (structure, pad and lot rows alike)."""
     if not rec.get("time"):
         return None
     t = _quantity(rec["time"], None, "s", where, "time")
@@ -269,7 +270,7 @@ def read_measurements(path, text: str | None = None) -> list:
             size = _length(rec, "structure_size", where)
             if size is not None and size < w:
                 raise MeasurementError(f"{where}: column 'structure_size': the block ({rec['structure_size']}) is narrower than one line ({rec['line_width']})")
-            t = _polish_time(rec, where)
+            t = read_polish_time(rec, where)
             k = None
             if rec.get("blanket_rate"):
                 k = _quantity(rec["blanket_rate"], None, "m/s", where, "blanket_rate")
@@ -293,7 +294,7 @@ def read_measurements(path, text: str | None = None) -> list:
             for col in header:
                 if rec[col] and (col in _STRUCTURE_COLUMNS[:4] or col in DIE_PARAMETERS) and col not in PARAMETERS:
                     raise MeasurementError(f"{where}: column {col!r} describes a test structure; it has no meaning for {q}")
-            t = _polish_time(rec, where)
+            t = read_polish_time(rec, where)
             if t is None and q == "pad_temperature_rise":
                 raise MeasurementError(f"{where}: column 'time' is empty; a temperature rise needs the polish time it was reached at")
             flow = None
