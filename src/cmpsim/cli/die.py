@@ -288,10 +288,10 @@ def _calibrated(kwargs: dict, config_path, params, wafer: bool, stack_path) -> d
 
 def _layers_of(layout) -> str:
     """"; FILE's layers with shapes: ..." for a message (empty if the file cannot be read: its own error comes later)."""
-    from ..layout.reader import layer_listing, read_layout
+    from ..layout.reader import layer_listing, layers_in, read_layout
 
     try:
         db = layout if hasattr(layout, "db") else read_layout(layout)
-        return f"; {db.name}'s layers with shapes: {layer_listing(db)}"
+        return f"; {db.name}'s layers with shapes: {layer_listing(layers_in(db))}"
     except Exception:  # noqa: BLE001 - a file that cannot be read is reported by the read itself
         return ""

@@ -85,7 +85,7 @@ def _pairs(layout: Layout, cell, layers, pdk, layer_map) -> set[tuple[int, int]]
     groups = resolve_layers(layers, pdk=pdk, layer_map=layer_map)
     in_file = layers_in(layout)
     present = layers_in(layout, cell)
-    listing = layer_listing(layout)
+    listing = layer_listing(in_file)
     pairs: set[tuple[int, int]] = set()
     for spec, group in zip([layers] if isinstance(layers, (str, tuple)) else layers, groups):
         have = [p for p in group if p in present]

@@ -157,9 +157,9 @@ def layers_in(layout: Layout, cell: kdb.Cell | None = None) -> set[tuple[int, in
     return found
 
 
-def layer_listing(layout: Layout, cell: kdb.Cell | None = None) -> str:
-    """The layers that carry shapes (under ``cell``, default any top cell) as "L/D, L/D, ...", or why there are none."""
-    return ", ".join(f"{l}/{d}" for l, d in sorted(layers_in(layout, cell))) or "none (the file holds no shapes: empty cells or texts only)"
+def layer_listing(pairs) -> str:
+    """The (layer, datatype) ``pairs`` of a file's shapes (:func:`layers_in`) as "L/D, L/D, ...", or why there are none."""
+    return ", ".join(f"{l}/{d}" for l, d in sorted(pairs)) or "none (the file holds no shapes: empty cells or texts only)"
 
 
 def layer_indexes(layout: Layout, pairs) -> list[int]:
