@@ -141,7 +141,6 @@ function endSweep(st) {
   const sweep = state.sweep;
   const failed = st.failed ? `, ${st.failed} failed` : "";
   $("sweep-status").textContent = `${st.status}: ${st.done} of ${st.total} points${failed}`;
-  $("sweep-status").dataset.state = st.status;
   if (st.error) showMessage("sweep-message", st.error);
   $("sweep-downloads").hidden = false;
   const file = $("download-sweep-file");
@@ -151,7 +150,11 @@ function endSweep(st) {
   nc.hidden = st.status !== "done";
   nc.href = `/api/sweeps/${sweep.id}/result`;
   nc.download = `cmpsim-sweep-${sweep.id}.nc`;
-  ensurePlotly().then(drawSweep, (err) => showMessage("sweep-message", err.message));
+  // the state is marked once the final curve is drawn (or Plotly failed to load), so whoever
+  // waits on data-state sees the plot of every point, not the one before the last event
+  ensurePlotly()
+    .then(drawSweep, (err) => showMessage("sweep-message", err.message))
+    .finally(() => { $("sweep-status").dataset.state = st.status; });
 }
 
 function addFailure(point) {
@@ -223,7 +226,7 @@ export function drawSweep() {
     ];
     layout.yaxis = { title: { text: label(d1) } };
   }
-  Plotly.react(div, traces, layout, PLOT_CONFIG);
+  return Plotly.react(div, traces, layout, PLOT_CONFIG);
 }
 
 export async function cancelSweep() {
