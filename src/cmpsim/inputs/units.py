@@ -81,7 +81,7 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
         return value, unit
     inside = m.group(2).strip()
     if not (inside[0].isalpha() or inside[0] in "%°µμÅ"):  # "1,500" or "1.5.2": not a number and a unit; the reader says it is no number
-        if inside[0] == "," and inside[1:].isdigit():
+        if inside[0] == "," and inside[1:2].isdigit():  # "1,500", "1,5 nm"
             raise ValueError(f"{value!r} is not a number (a thousands separator or a decimal comma? write the number with a decimal "
                              "point and no separator)")
         return value, unit
@@ -155,6 +155,8 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
         raise ValueError(f"{name} must be a number with units of {unit or 'none'}; got {value!r}")
     if isinstance(value, (int, float)):
         return float(value)
+    if isinstance(value, str):
+        _refuse_comma(value, name)
     try:
         q = registry().Quantity(value) if isinstance(value, str) else value
     except Exception as exc:  # pint raises several error types for bad strings
@@ -180,6 +182,15 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
         ) from None
     _check_angle(q, target, name, value)
     return out
+
+
+def _refuse_comma(text: str, name: str) -> None:
+    """ValueError for a quantity written with a comma (``"3,5 psi"``, ``"1,500 nm"``): pint drops the comma and
+    would read 35 psi and 1500 nm; whether it is a decimal comma or a thousands separator is not guessed."""
+    if "," in text:
+        raise ValueError(f"{name}: {text!r} has a comma: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
+                         "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
+                         "('3.5 psi', '1500 nm')")
 
 
 #: Words of pint's angle units: a rotation speed must name one (``rpm``, ``rad/s``, ``deg/s``, ``rev/min``).

@@ -409,7 +409,10 @@ def _one_unit(ds: Dataset) -> None:
 
 def _uncertainty(text: str, unit: str, quantity: str, where: str, bad) -> float:
     """The uncertainty cell in the row's ``unit``: a number, or a number with a unit of the quantity (``"10 nm/min"``)."""
-    number, own = units.value_and_unit(units.uncertainty_text(text), "")
+    try:
+        number, own = units.value_and_unit(units.uncertainty_text(text), "")
+    except ValueError as exc:  # "1,5": a decimal comma or a thousands separator
+        raise bad("uncertainty", str(exc)) from None
     try:
         u = _parse_float(number, "uncertainty", where)
     except DataError as exc:

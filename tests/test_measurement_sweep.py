@@ -1,0 +1,53 @@
+"""Data files as users type them in (a robustness sweep of the readers): each case is refused naming its line,
+row and column, or read as meant; never a traceback, never a value read other than as written."""
+
+from __future__ import annotations
+
+import pytest
+
+from cmpsim.calibration.mixed import read_all
+from cmpsim.inputs import units
+
+H = "quantity,value,unit,applied_pressure,rotation_speed,film"
+
+
+def _write(tmp_path, name, text, encoding="utf-8"):
+    p = tmp_path / name
+    p.write_bytes(text.encode(encoding))
+    return p
+
+
+@pytest.mark.parametrize(
+    "header, row, column",
+    [
+        (H, "removal_rate,150,nm/min,\"3,5 psi\",60 rpm,copper", "applied_pressure"),  # pint dropped the comma: 35 psi
+        (H, "removal_rate,150,nm/min,\"34,500 Pa\",60 rpm,copper", "applied_pressure"),
+        ("quantity,value,unit,process,line_width", "dishing,25,nm,copper,\"1,5 um\"", "line_width"),  # was read as 15 um
+        ("quantity,value,unit,time,applied_pressure,rotation_speed", "removal,300,nm,\"1,5 min\",4 psi,60 rpm", "time"),
+        ("wafer,quantity,value,unit,time", "1,thickness,500,nm,\"1,5 min\"", "time"),
+    ],
+)
+def test_a_quantity_with_a_comma_is_refused_not_read_without_it(tmp_path, header, row, column):
+    p = _write(tmp_path, "comma.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"comma.csv:2: row 1, column '{column}': .*has a comma.*decimal point"):
+        read_all([p])
+
+
+def test_a_quantity_with_a_comma_is_refused_by_the_units_too():
+    with pytest.raises(ValueError, match="has a comma"):
+        units.to_si("3,5 psi", "Pa", "applied_pressure")
+    assert units.to_si("3.5 psi", "Pa") == pytest.approx(3.5 * 6894.757, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "header, row",
+    [
+        ("quantity,value,unit,uncertainty", "removal_rate,150,nm/min,\"1,5\""),  # the film reader's message had no place
+        ("quantity,value", "removal_rate,\"1,5 um/min\""),
+    ],
+)
+def test_a_decimal_comma_in_a_value_or_uncertainty_names_its_place(tmp_path, header, row):
+    column = header.split(",")[-1]
+    p = _write(tmp_path, "eu.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"eu.csv:2: row 1, column '{column}': '1,5.*' is not a number \(a thousands separator"):
+        read_all([p])
