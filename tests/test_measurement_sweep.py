@@ -51,3 +51,24 @@ def test_a_decimal_comma_in_a_value_or_uncertainty_names_its_place(tmp_path, hea
     p = _write(tmp_path, "eu.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"eu.csv:2: row 1, column '{column}': '1,5.*' is not a number \(a thousands separator"):
         read_all([p])
+
+
+def test_a_lot_file_with_a_repeated_column_is_refused(tmp_path):
+    # the second 'value' was read and the first dropped without a word
+    p = _write(tmp_path, "lot.csv", "wafer,quantity,value,unit,value\n1,thickness,500,nm,600\n")
+    with pytest.raises(ValueError, match=r"lot.csv:1: column 'value': a column name is repeated in the header"):
+        read_all([p])
+
+
+@pytest.mark.parametrize(
+    "header, row",
+    [
+        ("quantity,value,unit,applied_pressure,Applied_Pressure", "removal_rate,150,nm/min,5 psi,4 psi"),
+        ("quantity,value,unit,process,line_width,line_width", "dishing,25,nm,copper,1 um,2 um"),
+        ("quantity,value,unit,applied_pressure (psi),applied_pressure [kPa]", "removal_rate,150,nm/min,5,30"),
+    ],
+)
+def test_a_repeated_column_is_named(tmp_path, header, row):
+    p = _write(tmp_path, "twice.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=r"twice.csv:1: (header, )?column '(applied_pressure|line_width)': (a column name is repeated|duplicate column names)"):
+        read_all([p])

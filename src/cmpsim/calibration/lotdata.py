@@ -104,6 +104,9 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
     if not body:
         raise LotDataError(f"{path}: no header row and no data rows")
     header = [h.strip() for h in next(csv.reader([body[0][1]]))]
+    repeated = sorted({h for h in header if header.count(h) > 1})
+    if repeated:  # the row's dict would keep the last of them silently
+        raise LotDataError(f"{path}:{body[0][0]}: column {repeated[0]!r}: a column name is repeated in the header ({', '.join(header)})")
     for col in header:
         if col not in LOT_COLUMNS:
             raise LotDataError(f"{path}:{body[0][0]}: column {col!r} has no meaning for a lot row; lot rows take {', '.join(LOT_COLUMNS)}")

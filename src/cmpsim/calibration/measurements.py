@@ -196,7 +196,8 @@ def read_measurements(path, text: str | None = None) -> list:
         if required not in header:
             raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(htext))
     if len(set(header)) != len(header):
-        raise MeasurementError(f"{where0}: a column name is repeated in the header")
+        twice = sorted({h for h in header if header.count(h) > 1})
+        raise MeasurementError(f"{where0}: column {twice[0]!r}: a column name is repeated in the header ({', '.join(header)})")
     for col in header:
         if col in _COMMON or col in _STRUCTURE_COLUMNS or col in DIE_PARAMETERS or col in _THERMAL_EXTRA or col in PARAMETERS:
             continue

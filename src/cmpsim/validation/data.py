@@ -276,7 +276,8 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         if required not in header:
             raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(header_text))
     if len(set(header)) != len(header):
-        raise DataError(f"{where0}: duplicate column names in the header")
+        twice = sorted({h for h in header if header.count(h) > 1})
+        raise DataError(f"{where0}: header, column {twice[0]!r}: duplicate column names in the header ({', '.join(header)})")
     for col in header:
         if col in META_COLUMNS or col in EXTRA_CONDITIONS or col in POINT_COLUMNS:
             continue
