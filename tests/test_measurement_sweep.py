@@ -72,3 +72,14 @@ def test_a_repeated_column_is_named(tmp_path, header, row):
     p = _write(tmp_path, "twice.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=r"twice.csv:1: (header, )?column '(applied_pressure|line_width)': (a column name is repeated|duplicate column names)"):
         read_all([p])
+
+
+def test_a_row_whose_first_cell_begins_with_a_hash_is_not_dropped_as_a_comment(tmp_path):
+    head = "label,quantity,value,unit,applied_pressure,rotation_speed,film\n"
+    p = _write(tmp_path, "hash.csv", head + "2,removal_rate,120,nm/min,2 psi,43 rpm,copper\n#1,removal_rate,150,nm/min,5 psi,63 rpm,copper\n")
+    with pytest.raises(ValueError, match=r"hash.csv:3: row 2, column 'label': the line starts with '#' but has the header's 7 fields"):
+        read_all([p])
+    # quoted, the cell is a label; a comment line, even with commas, is still a comment
+    ok = _write(tmp_path, "ok.csv", head + '"#1",removal_rate,150,nm/min,5 psi,63 rpm,copper\n# note: 5 psi, 63 rpm, copper\n')
+    [pt] = read_all([ok]).datasets[0].points
+    assert (pt.label, pt.value) == ("#1", 150.0)

@@ -114,6 +114,7 @@ def tidy_csv(text: str, path="") -> str:
         names.append((m.group(1) if m else h.strip()).lower())
         if m and m.group(2) and names[-1] not in TEXT_COLUMNS:
             header_units[k] = m.group(2)
+    _refuse_hidden_rows(lines, body[0], names, path)
     changed = False
     if names != [h.strip() for h in header]:
         lines[body[0]] = _csv_line(names)
@@ -140,6 +141,27 @@ def tidy_csv(text: str, path="") -> str:
                 lines[i] = _csv_line(named)
                 changed = True
     return "\n".join(lines) + "\n" if changed else text
+
+
+def _refuse_hidden_rows(lines: list[str], header_at: int, names: list[str], path) -> None:
+    """ValueError naming the line of a ``#`` line after the header that has the header's fields (``#1,removal_rate,150,...``):
+    a data row whose first cell begins with ``#`` (a label, a wafer ``#3``) that would be read as a comment and dropped."""
+    if len(names) < 3:  # too few columns to tell a row from a comment with commas
+        return
+    row = 0
+    for i in range(header_at + 1, len(lines)):
+        s = lines[i].strip()
+        if s and not s.startswith("#"):
+            row += 1
+        if not s.startswith("#"):
+            continue
+        cells = next(csv.reader([s]), [])
+        while len(cells) > len(names) and not cells[-1].strip():
+            cells.pop()
+        if len(cells) == len(names) and sum(bool(c.strip()) for c in cells) >= 3:
+            raise ValueError(f"{path}:{i + 1}: row {row + 1}, column {names[0]!r}: the line starts with '#' but has the header's "
+                             f"{len(names)} fields: a data row whose first cell begins with '#' ({cells[0].strip()!r}) would be read as a "
+                             f"comment and dropped; quote the cell (\"{cells[0].strip()}\"), drop the '#', or put another column first")
 
 
 def is_number(text: str) -> bool:
