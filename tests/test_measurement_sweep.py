@@ -83,3 +83,17 @@ def test_a_row_whose_first_cell_begins_with_a_hash_is_not_dropped_as_a_comment(t
     ok = _write(tmp_path, "ok.csv", head + '"#1",removal_rate,150,nm/min,5 psi,63 rpm,copper\n# note: 5 psi, 63 rpm, copper\n')
     [pt] = read_all([ok]).datasets[0].points
     assert (pt.label, pt.value) == ("#1", 150.0)
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le"])
+def test_a_utf16_file_is_named_as_such(tmp_path, encoding):
+    # without its byte-order mark, UTF-16 decoded as UTF-8 and the header read 'q\x00u\x00a...': "required column 'quantity' is missing"
+    p = _write(tmp_path, "u16.csv", "quantity,value,unit\nremoval_rate,150,nm/min\n", encoding=encoding)
+    with pytest.raises(ValueError, match=r"u16.csv' is UTF-16 text, not UTF-8 \(save it as UTF-8"):
+        read_all([p])
+
+
+def test_a_latin1_file_names_the_line_of_its_first_foreign_byte(tmp_path):
+    p = _write(tmp_path, "l1.csv", "quantity,value,unit\nremoval_rate,150,nm/min\nremoval_rate,0.2,\u00b5m/min\n", encoding="latin-1")
+    with pytest.raises(ValueError, match=r"l1.csv' is not UTF-8 text: line 3 has the byte"):
+        read_all([p])

@@ -50,14 +50,21 @@ def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str
     it would glue itself to the first column name or hide the first comment line.
     """
     path = Path(path)
+    save = "(save it as UTF-8, e.g. a spreadsheet's 'CSV UTF-8')"
     try:
-        return path.read_text(encoding="utf-8-sig")
+        data = path.read_bytes()
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} does not exist") from None
-    except UnicodeDecodeError as exc:
-        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc} (save it as UTF-8, e.g. a spreadsheet's 'CSV UTF-8')") from None
     except OSError as exc:
         raise error(f"cannot read {what} {str(path)!r}: {exc}") from None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in data[:4096]:  # a spreadsheet's "Unicode text": every other byte 0
+        raise error(f"{what} {str(path)!r} is UTF-16 text, not UTF-8 {save}")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise error(f"{what} {str(path)!r} is not UTF-8 text: line {line} has the byte {data[exc.start:exc.start + 1]!r} "
+                    f"({exc.reason}; a Windows or Latin-1 export writes 'µ' and 'Å' so) {save}") from None
 
 
 def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]:
