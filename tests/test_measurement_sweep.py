@@ -97,3 +97,11 @@ def test_a_latin1_file_names_the_line_of_its_first_foreign_byte(tmp_path):
     p = _write(tmp_path, "l1.csv", "quantity,value,unit\nremoval_rate,150,nm/min\nremoval_rate,0.2,\u00b5m/min\n", encoding="latin-1")
     with pytest.raises(ValueError, match=r"l1.csv' is not UTF-8 text: line 3 has the byte"):
         read_all([p])
+
+
+@pytest.mark.parametrize("header", [H, "quantity,value,unit,process,line_width,line_space", "wafer,quantity,value,unit"])
+def test_a_header_without_rows_says_so(tmp_path, header):
+    # a structure or lot template was refused for its columns ("unknown column 'process'") by the film reader
+    p = _write(tmp_path, "empty.csv", f"# dataset: t\n{header}\n,,,\n")
+    with pytest.raises(ValueError, match=r"empty.csv:2: the file has a header but no data rows"):
+        read_all([p])

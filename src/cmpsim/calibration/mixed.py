@@ -105,8 +105,8 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
     families = sorted(set(fam_of_line.values()))
     reader = {"film": "film", "structure": "measurement", "pad": "measurement", "lot": "lot"}
     groups = sorted({reader[f] for f in families})
-    if not groups:
-        return {"film": (text, rows)}  # no data row: the data-set reader says so ("no data rows")
+    if not groups:  # no data row: said before the film reader refuses the columns of a structure or lot template
+        raise MixedDataError(f"{path}:{body[0][0]}: the file has a header but no data rows (header: {', '.join(header)})")
     # a column of another family that no row fills (a template's structure columns, a wafer column without lots) is
     # dropped; a name no family knows is still refused by the reader
     empty = {k for k in range(len(header)) if not any(parsed[i][k].strip() for i in parsed)}
