@@ -105,3 +105,11 @@ def test_a_header_without_rows_says_so(tmp_path, header):
     p = _write(tmp_path, "empty.csv", f"# dataset: t\n{header}\n,,,\n")
     with pytest.raises(ValueError, match=r"empty.csv:2: the file has a header but no data rows"):
         read_all([p])
+
+
+def test_a_unit_after_a_comma_in_the_header(tmp_path):
+    # '"value, nm/min"' was one column name: "required column 'value' is missing (header: quantity, value, nm/min, ...)"
+    p = _write(tmp_path, "hdr.csv", 'quantity,"value, nm/min","applied_pressure, psi",rotation_speed\nremoval_rate,150,5,60 rpm\n')
+    [pt] = read_all([p]).datasets[0].points
+    assert (pt.value, pt.unit, pt.conditions["applied_pressure"]) == (150.0, "nm/min", "5 psi")
+

@@ -91,7 +91,7 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
 NAME_COLUMNS = ("quantity", "comparison", "process", "film")
 #: Columns that hold no quantity: a unit in their header (``wafer (#)``) is dropped, not given to their cells.
 TEXT_COLUMNS = NAME_COLUMNS + ("dataset", "wafer", "source", "label", "note", "unit")
-_HEADER_UNIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*[\(\[]\s*(.*?)\s*[\)\]]\s*$")
+_HEADER_UNIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:[\(\[]\s*(.*?)\s*[\)\]]|,\s*(.*?))\s*$")
 
 
 def tidy_csv(text: str, path="") -> str:
@@ -119,8 +119,8 @@ def tidy_csv(text: str, path="") -> str:
     for k, h in enumerate(header[:n]):  # "value (nm/min)", "applied_pressure [psi]": the unit of the column's plain numbers
         m = _HEADER_UNIT.match(h)
         names.append((m.group(1) if m else h.strip()).lower())
-        if m and m.group(2) and names[-1] not in TEXT_COLUMNS:
-            header_units[k] = m.group(2)
+        if m and (m.group(2) or m.group(3)) and names[-1] not in TEXT_COLUMNS:
+            header_units[k] = m.group(2) or m.group(3)
     _refuse_hidden_rows(lines, body[0], names, path)
     changed = False
     if names != [h.strip() for h in header]:
