@@ -113,3 +113,21 @@ def test_a_unit_after_a_comma_in_the_header(tmp_path):
     [pt] = read_all([p]).datasets[0].points
     assert (pt.value, pt.unit, pt.conditions["applied_pressure"]) == (150.0, "nm/min", "5 psi")
 
+
+
+@pytest.mark.parametrize(
+    "header, row, column, message",
+    [
+        ("quantity,value,unit,process,line_width,time", "dishing,25,nm,copper,1 um,1:30", "time", r"'1:30' is written as a clock"),
+        ("wafer,quantity,value,unit,time", "1,thickness,500,nm,1:30", "time", r"'1:30' is written as a clock"),
+        ("quantity,value,unit,process,line_width", "dishing,25,nm,copper,1", "line_width", r"'1' has no unit .*; write it with its unit \(e.g. '1 um'\)"),
+        (H, "removal_rate,150,nm/min,5,60 rpm,copper", "applied_pressure", r"'5' has no unit .*; write it with its unit \(e.g. '5 psi'\)"),
+        ("quantity,value,unit,process,line_width,line_space", "dishing,25,nm,copper,1 um,0 um", "line_space",
+         r"must be a length > 0 \(a space of 0 .* leave the cell empty for an isolated line"),
+    ],
+)
+def test_a_time_as_a_clock_a_bare_number_and_a_space_of_0_say_how_to_write_them(tmp_path, header, row, column, message):
+    # they said "has the wrong dimension; expected units convertible to 's'" (pint reads 1:30 as a ratio)
+    p = _write(tmp_path, "say.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"say.csv:2: row 1, column '{column}'.*{message}"):
+        read_all([p])

@@ -116,12 +116,16 @@ def shipped_measurement_paths(kind: str = "die") -> list[Path]:
     return sorted(p for p in root.iterdir() if p.name.startswith(prefix) and p.suffix == ".csv")
 
 
+#: The unit a message suggests for a cell without one, by SI unit: lengths of structures in um, flows in mL/min.
+_EXAMPLE_UNITS = {"m": "um", "m^3/s": "mL/min", "m/s": "nm/s", "Pa": "psi"}
+
+
 def _quantity(text: str, unit: str, target: str, where: str, column: str) -> float:
     from ..inputs import units
 
     try:
         if unit is None:
-            return float(units.to_si(text, target, column))
+            return float(units.to_si(text, target, column, example=_EXAMPLE_UNITS.get(target, target)))
         v = float(text)
         if not math.isfinite(v):
             raise ValueError("not finite")
@@ -152,7 +156,8 @@ def _length(rec, column, where, required=False, positive=True):
         return None
     v = _quantity(text, None, "m", where, column)
     if not math.isfinite(v) or (positive and v <= 0):
-        raise MeasurementError(f"{where}: column {column!r} = {text!r} must be a length > 0")
+        why = " (a space of 0 would make the block one solid line; leave the cell empty for an isolated line in a field)" if column == "line_space" else ""
+        raise MeasurementError(f"{where}: column {column!r} = {text!r} must be a length > 0{why}")
     return v
 
 

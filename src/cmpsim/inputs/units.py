@@ -177,6 +177,9 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
         if fixed is not None:
             _check_angle(fixed, target, name, value)
             return float(fixed.to(target).magnitude)
+        if isinstance(value, str) and is_number(value.strip()):
+            raise ValueError(f"{name}: {value!r} has no unit (the wrong dimension for units of {target!r}); write it with its unit "
+                             f"(e.g. '{value.strip()} {example or target}')") from None
         raise ValueError(
             f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r} (e.g. {example or target})"
         ) from None
@@ -184,13 +187,20 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
     return out
 
 
+_CLOCK = re.compile(r"^\s*\d+(:\d+){1,2}(\.\d*)?\s*$")
+
+
 def _refuse_comma(text: str, name: str) -> None:
     """ValueError for a quantity written with a comma (``"3,5 psi"``, ``"1,500 nm"``): pint drops the comma and
-    would read 35 psi and 1500 nm; whether it is a decimal comma or a thousands separator is not guessed."""
+    would read 35 psi and 1500 nm; whether it is a decimal comma or a thousands separator is not guessed. So too
+    a time written as a clock (``"1:30"``): minutes and seconds, or hours and minutes?"""
     if "," in text:
         raise ValueError(f"{name}: {text!r} has a comma: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
                          "('3.5 psi', '1500 nm')")
+    if _CLOCK.match(text):  # "1:30": pint reads a ratio of 1 and 30
+        raise ValueError(f"{name}: {text!r} is written as a clock (minutes:seconds? hours:minutes?), which is not guessed; "
+                         "write one number with its unit ('90 s', '1.5 min')")
 
 
 #: Words of pint's angle units: a rotation speed must name one (``rpm``, ``rad/s``, ``deg/s``, ``rev/min``).
