@@ -131,3 +131,17 @@ def test_a_time_as_a_clock_a_bare_number_and_a_space_of_0_say_how_to_write_them(
     p = _write(tmp_path, "say.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"say.csv:2: row 1, column '{column}'.*{message}"):
         read_all([p])
+
+
+@pytest.mark.parametrize(
+    "header, row, film",
+    [
+        (H, "removal_rate,150,nm/min,5 psi,60 rpm,Cu", "copper"),
+        (H, "removal_rate,150,nm/min,5 psi,60 rpm,TEOS", "oxide"),
+        ("wafer,quantity,value,unit,film", "1,thickness,500,nm,Cu", "copper"),  # the lot row kept 'cu' without a word
+    ],
+)
+def test_a_film_named_as_papers_name_it_is_refused_with_cmpsims_name(tmp_path, header, row, film):
+    p = _write(tmp_path, "film.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"film.csv:2: row 1, column 'film': .*oxide'?, '?copper.*write '{film}'"):
+        read_all([p])

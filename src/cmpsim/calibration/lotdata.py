@@ -146,6 +146,14 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
             unc = _length(rec, "uncertainty", unit, where)
             if not unc > 0:
                 raise LotDataError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")
+        film = rec.get("film") or None
+        if film is not None:
+            from ..inputs.config import PARAMETERS
+            from ..validation.data import film_hint
+
+            if film not in PARAMETERS["film"].choices:  # "cu" was kept, and refused against the recipe's "copper" only with --recipe
+                raise LotDataError(f"{where}: column 'film': {rec['film']!r} is not a film of cmpsim; one of "
+                                   f"{', '.join(PARAMETERS['film'].choices)}{film_hint(film)}")
         from .measurements import MeasurementError, read_polish_time
 
         try:
@@ -162,7 +170,7 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
                 raise LotDataError(f"{where}: {exc}") from None
             if not all(math.isfinite(v) and v > 0 for v in zp):
                 raise LotDataError(f"{where}: column 'zone_pressures' = {rec['zone_pressures']!r}: every pressure must be > 0")
-        out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
+        out.append(LotRecord(wafer, q, value, unc, film, rec.get("dataset") or meta.get("dataset") or path.stem,
                              lineno, rec.get("source", ""), rec.get("label", ""), str(path), t, zp))
     check_once(out)
     return out

@@ -362,7 +362,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             try:
                 point_config(base, {col: text})
             except ValueError as exc:
-                raise bad(col, str(exc)) from None
+                raise bad(col, str(exc) + (film_hint(text) if col == "film" else "")) from None
         try:
             point_config(base, conditions)
         except ValueError as exc:
@@ -384,6 +384,18 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             if len(ds.points) < 2:
                 raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
     return list(datasets.values())
+
+
+#: Names of films in papers and fab logs (lower case) -> the film of cmpsim they would be; only named in a refusal, never
+#: read as it: which removal law a fab's oxide (thermal, TEOS, HDP) or barrier (Ta, TaN, Ti, TiN) follows is the user's choice.
+FILM_WORDS = {"cu": "copper", "sio2": "oxide", "teos": "oxide", "peteos": "oxide", "pe-teos": "oxide", "hdp": "oxide", "ild": "oxide",
+              "thermal oxide": "oxide", "w": "tungsten", "ta": "barrier", "tan": "barrier", "ti": "barrier", "tin": "barrier"}
+
+
+def film_hint(text: str) -> str:
+    """" (for 'Cu' write copper ...)" for a film named as papers name it ("" for other names)."""
+    film = FILM_WORDS.get(" ".join(text.lower().split()))
+    return f" (for {text.strip()!r} write {film!r}, if its removal law is cmpsim's {film})" if film else ""
 
 
 def _near(name: str, names) -> str:
