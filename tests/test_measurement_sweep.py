@@ -145,3 +145,16 @@ def test_a_film_named_as_papers_name_it_is_refused_with_cmpsims_name(tmp_path, h
     p = _write(tmp_path, "film.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"film.csv:2: row 1, column 'film': .*oxide'?, '?copper.*write '{film}'"):
         read_all([p])
+
+
+def test_excels_separator_line(tmp_path):
+    # "sep=," (Excel's hint) was taken for the header: "required column 'quantity' is missing (header: sep=)"
+    ok = _write(tmp_path, "sep.csv", f"sep=,\n{H}\nremoval_rate,150,nm/min,5 psi,60 rpm,copper\n")
+    [pt] = read_all([ok]).datasets[0].points
+    assert (pt.value, pt.line) == (150.0, 3)
+    eu = _write(tmp_path, "eu.csv", "sep=;\nquantity;value;unit\nremoval_rate;150,5;nm/min\n")
+    with pytest.raises(ValueError, match=r"eu.csv:1: the line 'sep=;' says the file is separated by ';'"):
+        read_all([eu])
+    mixed = _write(tmp_path, "mixed.csv", "quantity;value;unit;note, free text\nremoval_rate;150,5;nm/min;x\n")
+    with pytest.raises(ValueError, match=r"mixed.csv:1: required column 'quantity' is missing .*separated by semicolons"):
+        read_all([mixed])

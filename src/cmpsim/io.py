@@ -111,6 +111,14 @@ def tidy_csv(text: str, path="") -> str:
     body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.strip().startswith("#")]
     if not body:
         return text
+    sep = re.fullmatch(r"\s*sep=(.?)\s*,*\s*", lines[body[0]], flags=re.I)
+    if sep:  # Excel's "sep=;" line names the separator: a comma is this reader's, anything else is refused
+        if sep.group(1) != ",":
+            raise ValueError(f"{path}:{body[0] + 1}: the line {lines[body[0]].strip()!r} says the file is separated by "
+                             f"{sep.group(1)!r}: cmpsim reads comma-separated files with a decimal point; export the sheet "
+                             "as CSV with ',' as the separator")
+        lines[body[0]] = ""
+        return tidy_csv("\n".join(lines) + "\n", path)
     header = next(csv.reader([lines[body[0]]]))
     n = len(header)
     while n > 1 and not header[n - 1].strip():
@@ -189,7 +197,7 @@ def _csv_line(values) -> str:
 def delimiter_hint(header_text: str) -> str:
     """A hint for a header that is not comma-separated (``quantity;value;unit``): "" when it is."""
     for sep, name in ((";", "semicolons"), ("\t", "tabs")):
-        if sep in header_text and "," not in header_text:
+        if header_text.count(sep) > header_text.count(","):  # "quantity;value;unit;note, free": a comma inside a name
             return (f" (the header is separated by {name}: cmpsim reads comma-separated files with a decimal point; "
                     "export the sheet as CSV with ',' as the separator)")
     return ""
