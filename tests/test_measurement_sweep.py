@@ -158,3 +158,10 @@ def test_excels_separator_line(tmp_path):
     mixed = _write(tmp_path, "mixed.csv", "quantity;value;unit;note, free text\nremoval_rate;150,5;nm/min;x\n")
     with pytest.raises(ValueError, match=r"mixed.csv:1: required column 'quantity' is missing .*separated by semicolons"):
         read_all([mixed])
+
+
+def test_a_lot_row_that_lost_its_wafer_number_says_so(tmp_path):
+    # it became a film row and was refused as "quantity 'thickness' needs the time column"
+    p = _write(tmp_path, "lot.csv", "wafer,quantity,value,unit,time\n1,thickness,500,nm,60 s\n,thickness,480,nm,61 s\n")
+    with pytest.raises(ValueError, match=r"lot.csv:3: row 2, column 'wafer': empty, but the file's other rows are a lot's wafers"):
+        read_all([p])

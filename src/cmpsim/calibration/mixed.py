@@ -102,6 +102,7 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
             raise MixedDataError(f"{path}:{lineno}: row {row_no}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
         parsed[lineno] = row
         fam_of_line[lineno] = family_of(row[q_at].strip(), row[w_at].strip() if w_at is not None else "")
+    _lot_row_without_wafer(path, header, parsed, fam_of_line, rows)
     families = sorted(set(fam_of_line.values()))
     reader = {"film": "film", "structure": "measurement", "pad": "measurement", "lot": "lot"}
     groups = sorted({reader[f] for f in families})
@@ -140,6 +141,21 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
                 new.append(ln)
         out[g] = ("\n".join(new) + "\n", rows)
     return out
+
+
+def _lot_row_without_wafer(path, header, parsed, fam_of_line, rows) -> None:
+    """MixedDataError naming the ``wafer`` of a row that lost its wafer number among a lot's rows: a ``thickness`` without
+    ``initial_thickness`` or a ``removal`` without ``time`` cannot be a film row, whose refusal ("needs the time column")
+    would not say that the wafer is missing."""
+    if "lot" not in fam_of_line.values():
+        return
+    at = {c: header.index(c) for c in ("quantity", "time", "initial_thickness") if c in header}
+    for line, row in parsed.items():
+        q = row[at["quantity"]].strip()
+        needs = {"thickness": "initial_thickness", "removal": "time"}.get(q)
+        if fam_of_line[line] == "film" and needs and not (needs in at and row[at[needs]].strip()):
+            raise MixedDataError(f"{path}:{line}: row {rows[line]}, column 'wafer': empty, but the file's other rows are a lot's wafers: "
+                                 f"give this {q} its wafer (a {q} of a blanket film, without a wafer, needs the {needs} column)")
 
 
 def _csv_line(values) -> str:
