@@ -296,6 +296,8 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     default_name = meta.get("dataset") or path.stem
     default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,").lower()
     datasets: dict[str, Dataset] = {}
+    base = Config.default()
+    checked: set = set()  # the cells and rows of conditions already checked (10,000 rows repeat a few settings)
     rows = csv.reader([t for _, t in body_lines[1:]])
     for row_no, ((lineno, _), row) in enumerate(zip(body_lines[1:], rows), start=1):
         where = f"{path}:{lineno}"
@@ -357,16 +359,19 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             if col in META_COLUMNS or col in POINT_COLUMNS or not rec[col]:
                 continue
             conditions[col] = rec[col]
-        base = Config.default()
         for col, text in conditions.items():  # each column alone first: the error names it
+            if (col, text) not in checked:
+                try:
+                    point_config(base, {col: text})
+                except ValueError as exc:
+                    raise bad(col, str(exc) + (film_hint(text) if col == "film" else "")) from None
+                checked.add((col, text))
+        if tuple(conditions.items()) not in checked:
             try:
-                point_config(base, {col: text})
+                point_config(base, conditions)
             except ValueError as exc:
-                raise bad(col, str(exc) + (film_hint(text) if col == "film" else "")) from None
-        try:
-            point_config(base, conditions)
-        except ValueError as exc:
-            raise bad(", ".join(conditions), str(exc)) from None
+                raise bad(", ".join(conditions), str(exc)) from None
+            checked.add(tuple(conditions.items()))
         name = rec.get("dataset") or default_name
         p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no, str(path))
         ds = datasets.setdefault(name, Dataset(name, [], dict(meta), path))
