@@ -177,3 +177,19 @@ def test_thousands_of_rows_read_in_a_second(tmp_path):
     pts = read_all([p]).datasets[0].points
     assert len(pts) == 2000 and pts[-1].conditions["rotation_speed"] == "50 rpm"
     assert time.perf_counter() - t < 1.5
+
+
+@pytest.mark.parametrize(
+    "header, row, column",
+    [
+        ("quantity,value,unit,process,line_width,line_space", "dishing,25,nm,copper,1 um,-", "line_space"),  # said "cannot read '-' (); ..."
+        (H, "removal_rate,150,nm/min,n/a,60 rpm,copper", "applied_pressure"),
+        ("quantity,value,unit,uncertainty", "removal_rate,150,nm/min,n/a", "uncertainty"),
+        ("quantity,value,unit,uncertainty,process,line_width", "dishing,25,nm,-,copper,1 um", "uncertainty"),
+        ("wafer,quantity,value,unit,uncertainty", "1,thickness,500,nm,n/a", "uncertainty"),
+    ],
+)
+def test_a_cell_that_stands_for_no_value_says_to_leave_it_empty(tmp_path, header, row, column):
+    p = _write(tmp_path, "na.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"na.csv:2: row 1, column '{column}': .*stands for no value: leave the cell empty"):
+        read_all([p])

@@ -77,7 +77,7 @@ def _length(rec: dict, column: str, unit: str, where: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number") from None
+        raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number{units.placeholder_hint(text)}") from None
     try:
         si = float(units.convert(v, unit, "m"))
     except Exception as exc:  # noqa: BLE001 - pint's errors: a unit that is not a length

@@ -223,7 +223,7 @@ def read_measurements(path, text: str | None = None) -> list:
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
                                    f"{', '.join(list(STRUCTURE_QUANTITIES) + list(THERMAL_QUANTITIES))}")
-        from ..inputs.units import read_value_cells
+        from ..inputs.units import placeholder_hint, read_value_cells
 
         try:  # "50 nm", "±4 nm"
             read_value_cells(rec)
@@ -240,7 +240,7 @@ def read_measurements(path, text: str | None = None) -> list:
         try:
             float(rec["value"])
         except ValueError:
-            raise MeasurementError(f"{where}: column 'value': {rec['value']!r} is not a number") from None
+            raise MeasurementError(f"{where}: column 'value': {rec['value']!r} is not a number{placeholder_hint(rec['value'])}") from None
         if q == "pad_temperature_rise":  # a difference of temperatures: a degree Celsius is a kelvin, a degree Fahrenheit 5/9 K
             unit = _temperature_difference_unit(rec["unit"])
         else:
@@ -251,7 +251,8 @@ def read_measurements(path, text: str | None = None) -> list:
             try:
                 float(rec["uncertainty"])
             except ValueError:
-                raise MeasurementError(f"{where}: column 'uncertainty': {rec['uncertainty']!r} is not a number") from None
+                raise MeasurementError(f"{where}: column 'uncertainty': {rec['uncertainty']!r} is not a number"
+                                       f"{placeholder_hint(rec['uncertainty'])}") from None
             unc = _quantity(rec["uncertainty"], unit, target, where, "uncertainty")
             if not unc > 0:
                 raise MeasurementError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")

@@ -26,7 +26,7 @@ from typing import Any
 
 from ..io import is_number
 
-__all__ = ["normalise_unit", "value_and_unit", "uncertainty_text", "read_value_cells", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
+__all__ = ["placeholder_hint", "normalise_unit", "value_and_unit", "uncertainty_text", "read_value_cells", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
 ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "a/s": "angstrom/second", "å/s": "angstrom/second", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
@@ -200,6 +200,18 @@ def _quantity_to_si(value: Any, unit: str, name: str, example: str | None) -> fl
     return out
 
 
+#: Cells that stand for "no value" in spreadsheets and papers (lower case): refused with :func:`placeholder_hint`.
+PLACEHOLDERS = ("-", "--", "\u2013", "\u2014", "n/a", "na", "n.a.", "none", "null", "?", "nd", "n.d.")
+
+
+def placeholder_hint(text: str) -> str:
+    """" (... leave the cell empty ...)" for a cell that stands for no value (``-``, ``n/a``); "" for any other text."""
+    if text.strip().lower() not in PLACEHOLDERS:
+        return ""
+    return (f" ({text.strip()!r} stands for no value: leave the cell empty where the column is optional and the value not known, "
+            "or leave out the row)")
+
+
 _CLOCK = re.compile(r"^\s*\d+(:\d+){1,2}(\.\d*)?\s*$")
 
 
@@ -211,6 +223,8 @@ def _refuse_comma(text: str, name: str) -> None:
         raise ValueError(f"{name}: {text!r} has a comma: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
                          "('3.5 psi', '1500 nm')")
+    if placeholder_hint(text):  # pint's message for "-" is "()"
+        raise ValueError(f"{name}: {text!r} is not a quantity{placeholder_hint(text)}")
     if _CLOCK.match(text):  # "1:30": pint reads a ratio of 1 and 30
         raise ValueError(f"{name}: {text!r} is written as a clock (minutes:seconds? hours:minutes?), which is not guessed; "
                          "write one number with its unit ('90 s', '1.5 min')")

@@ -248,7 +248,7 @@ def _parse_float(text: str, what: str, where: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise DataError(f"{where}: {what} {text!r} is not a number") from None
+        raise DataError(f"{where}: {what} {text!r} is not a number{units.placeholder_hint(text)}") from None
     if not math.isfinite(v):
         raise DataError(f"{where}: {what} {text!r} is not finite")
     return v
