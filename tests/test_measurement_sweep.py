@@ -193,3 +193,15 @@ def test_a_cell_that_stands_for_no_value_says_to_leave_it_empty(tmp_path, header
     p = _write(tmp_path, "na.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"na.csv:2: row 1, column '{column}': .*stands for no value: leave the cell empty"):
         read_all([p])
+
+
+@pytest.mark.parametrize(
+    "header, row",
+    [("quantity,value,unit", "removal_rate,150 ± 10,nm/min"), ("quantity,value", "removal_rate,150 +/- 10 nm/min"),
+     ("wafer,quantity,value,unit", "1,thickness,500 ± 5,nm")],
+)
+def test_a_value_printed_with_its_uncertainty_says_where_the_uncertainty_goes(tmp_path, header, row):
+    # said "value '150 ± 10' is not a number", or asked for a unit column the row had
+    p = _write(tmp_path, "pm.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=r"pm.csv:2: row 1, column 'value': .* holds an uncertainty: .* in the uncertainty column"):
+        read_all([p])

@@ -80,6 +80,8 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
     if not m or not m.group(2).strip():
         return value, unit
     inside = m.group(2).strip()
+    if uncertainty_text(inside) != inside:  # "150 ± 10 nm/min": not guessed which unit the 10 is in, nor read as a number
+        raise ValueError(f"{value!r} holds an uncertainty: give the value here and its uncertainty in the uncertainty column")
     if not (inside[0].isalpha() or inside[0] in "%°µμÅ"):  # "1,500" or "1.5.2": not a number and a unit; the reader says it is no number
         if inside[0] == "," and inside[1:2].isdigit():  # "1,500", "1,5 nm"
             raise ValueError(f"{value!r} is not a number (a thousands separator or a decimal comma? write the number with a decimal "
