@@ -205,3 +205,28 @@ def test_a_value_printed_with_its_uncertainty_says_where_the_uncertainty_goes(tm
     p = _write(tmp_path, "pm.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=r"pm.csv:2: row 1, column 'value': .* holds an uncertainty: .* in the uncertainty column"):
         read_all([p])
+
+
+@pytest.mark.parametrize(
+    "text, target",
+    [("93/87 rpm", "rad/s"), ("34 500 Pa", "Pa"), ("2 3 psi", "Pa"), ("60 s 30", "s"), ("2^3 psi", "Pa"), ("200 mm (8 in)", "m")],
+)
+def test_a_quantity_with_two_numbers_is_refused(text, target):
+    # pint multiplied or divided them: '93/87 rpm' (platen/head) was 1.07 rpm, '34 500 Pa' 17000 Pa
+    with pytest.raises(ValueError, match="holds more than one number"):
+        units.to_si(text, target, "x")
+
+
+@pytest.mark.parametrize(
+    "text, target, si",
+    [("175 mL/min", "m^3/s", 175e-6 / 60), ("300 g/cm2", "Pa", 300 * 9.80665 * 10), ("249.5 nm min-1", "m/s", 249.5e-9 / 60),
+     ("249.5 nm·min⁻¹", "m/s", 249.5e-9 / 60), ("1.2E+03 Pa", "Pa", 1200.0), ("2 m^3/s", "m^3/s", 2.0), ("5 1/s", "1/s", 5.0)],
+)
+def test_units_with_powers_still_read(text, target, si):
+    assert units.to_si(text, target) == pytest.approx(si, rel=1e-9)
+
+
+def test_a_platen_and_head_speed_in_one_cell_names_its_row(tmp_path):
+    p = _write(tmp_path, "rpm.csv", f"{H}\nremoval_rate,150,nm/min,5 psi,93/87 rpm,copper\n")
+    with pytest.raises(ValueError, match=r"rpm.csv:2: row 1, column 'rotation_speed': .*'93/87 rpm' holds more than one number"):
+        read_all([p])

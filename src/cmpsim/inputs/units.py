@@ -166,7 +166,7 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
 def _text_to_si(value: str, unit: str, name: str, example: str | None) -> float:
     """:func:`to_si` of a text, remembered: a data file's column repeats a few texts over thousands of rows, and pint
     parses each in about 0.2 ms."""
-    _refuse_comma(value, name)
+    _refuse_misread(value, name)
     return _quantity_to_si(value, unit, name, example)
 
 
@@ -217,10 +217,16 @@ def placeholder_hint(text: str) -> str:
 _CLOCK = re.compile(r"^\s*\d+(:\d+){1,2}(\.\d*)?\s*$")
 
 
-def _refuse_comma(text: str, name: str) -> None:
-    """ValueError for a quantity written with a comma (``"3,5 psi"``, ``"1,500 nm"``): pint drops the comma and
-    would read 35 psi and 1500 nm; whether it is a decimal comma or a thousands separator is not guessed. So too
-    a time written as a clock (``"1:30"``): minutes and seconds, or hours and minutes?"""
+#: A unit word's power (``cm2``, ``m^3``, ``min-1``, ``s**-1``) or a leading ``1/``: the digits a unit may hold.
+_UNIT_POWER = re.compile(r"(?<=[A-Za-zµμÅå°%)])(\^|\*\*)?-?[0-9]+|^1\s*/")
+
+
+def _refuse_misread(text: str, name: str) -> None:
+    """ValueError for a quantity pint would read other than as written: with a comma (``"3,5 psi"``, ``"1,500 nm"``:
+    pint drops it and reads 35 psi, 1500 nm; a decimal comma or a thousands separator is not guessed), with a second
+    number (``"93/87 rpm"``, a platen and a head speed, read as 1.07 rpm; ``"34 500 Pa"`` read as 34 x 500 Pa;
+    ``"2 3 psi"``), a time written as a clock (``"1:30"``: minutes and seconds, or hours and minutes?), and a cell
+    that stands for no value (``"-"``)."""
     if "," in text:
         raise ValueError(f"{name}: {text!r} has a comma: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
@@ -230,6 +236,10 @@ def _refuse_comma(text: str, name: str) -> None:
     if _CLOCK.match(text):  # "1:30": pint reads a ratio of 1 and 30
         raise ValueError(f"{name}: {text!r} is written as a clock (minutes:seconds? hours:minutes?), which is not guessed; "
                          "write one number with its unit ('90 s', '1.5 min')")
+    m = _NUMBER.match(text)
+    if m and any(c in "0123456789" for c in _UNIT_POWER.sub("", m.group(2))):  # pint multiplies or divides the numbers
+        raise ValueError(f"{name}: {text!r} holds more than one number (two settings such as a platen and a head speed, a range, "
+                         "a thousands separator written as a space?), which pint would multiply or divide; write one number and its unit")
 
 
 #: Words of pint's angle units: a rotation speed must name one (``rpm``, ``rad/s``, ``deg/s``, ``rev/min``).
