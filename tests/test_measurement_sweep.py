@@ -230,3 +230,15 @@ def test_a_platen_and_head_speed_in_one_cell_names_its_row(tmp_path):
     p = _write(tmp_path, "rpm.csv", f"{H}\nremoval_rate,150,nm/min,5 psi,93/87 rpm,copper\n")
     with pytest.raises(ValueError, match=r"rpm.csv:2: row 1, column 'rotation_speed': .*'93/87 rpm' holds more than one number"):
         read_all([p])
+
+
+@pytest.mark.parametrize(
+    "header, row, column",
+    [("quantity,value,unit", "removal_rate,1_497,A/min", "value"), ("quantity,value,unit,process,line_width", "dishing,25,nm,copper,1_0 um", "line_width"),
+     ("wafer,quantity,value,unit", "1,thickness,5_000,A", "value")],
+)
+def test_an_underscore_between_digits_is_refused_as_a_separator(tmp_path, header, row, column):
+    # Python's float() and pint read '1_497' as 1497: a thousands separator, which a comma is refused as
+    p = _write(tmp_path, "u.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"u.csv:2: row 1, column '{column}': .*separator"):
+        read_all([p])

@@ -76,6 +76,8 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
 
     Raises ``ValueError`` when the cell's unit and the unit column disagree (the value is not guessed).
     """
+    if re.search(r"[0-9]_[0-9]", value):  # Python's float() reads "1_497" as 1497: a separator, refused as a comma is
+        raise ValueError(f"{value!r} is not a number (a thousands separator? write the number with a decimal point and no separator)")
     m = _NUMBER.match(value)
     if not m or not m.group(2).strip():
         return value, unit
@@ -227,8 +229,8 @@ def _refuse_misread(text: str, name: str) -> None:
     number (``"93/87 rpm"``, a platen and a head speed, read as 1.07 rpm; ``"34 500 Pa"`` read as 34 x 500 Pa;
     ``"2 3 psi"``), a time written as a clock (``"1:30"``: minutes and seconds, or hours and minutes?), and a cell
     that stands for no value (``"-"``)."""
-    if "," in text:
-        raise ValueError(f"{name}: {text!r} has a comma: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
+    if "," in text or re.search(r"[0-9]_[0-9]", text):
+        raise ValueError(f"{name}: {text!r} has a {'comma' if ',' in text else 'digit separator'}: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
                          "('3.5 psi', '1500 nm')")
     if placeholder_hint(text):  # pint's message for "-" is "()"
