@@ -242,3 +242,12 @@ def test_an_underscore_between_digits_is_refused_as_a_separator(tmp_path, header
     p = _write(tmp_path, "u.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"u.csv:2: row 1, column '{column}': .*separator"):
         read_all([p])
+
+
+@pytest.mark.parametrize("header, row, where", [("quantity,value,,unit", "removal_rate,150,,nm/min", "3 \\(after 'value'\\)"),
+                                                (",quantity,value,unit", ",removal_rate,150,nm/min", "1 \\(the first\\)")])
+def test_a_column_without_a_name_is_named_by_its_place(tmp_path, header, row, where):
+    # said "unknown column ''"
+    p = _write(tmp_path, "blank.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"blank.csv:1: header, column {where} has no name: delete the sheet's empty column"):
+        read_all([p])

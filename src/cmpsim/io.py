@@ -129,6 +129,10 @@ def tidy_csv(text: str, path="") -> str:
         names.append((m.group(1) if m else h.strip()).lower())
         if m and (m.group(2) or m.group(3)) and names[-1] not in TEXT_COLUMNS:
             header_units[k] = m.group(2) or m.group(3)
+    if "" in names:  # an empty column of the sheet between two others: "unknown column ''" did not say which
+        k = names.index("")
+        raise ValueError(f"{path}:{body[0] + 1}: header, column {k + 1} ({f'after {names[k - 1]!r}' if k else 'the first'}) has no name: "
+                         "delete the sheet's empty column, or name it (note, source, label)")
     _refuse_hidden_rows(lines, body[0], names, path)
     changed = False
     if names != [h.strip() for h in header]:
