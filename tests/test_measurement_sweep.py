@@ -251,3 +251,10 @@ def test_a_column_without_a_name_is_named_by_its_place(tmp_path, header, row, wh
     p = _write(tmp_path, "blank.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"blank.csv:1: header, column {where} has no name: delete the sheet's empty column"):
         read_all([p])
+
+
+def test_zone_pressures_separated_by_spaces_are_refused(tmp_path):
+    # one zone of 3.1 x 3.0 x 2.9 = 27 psi was read
+    p = _write(tmp_path, "zp.csv", "wafer,quantity,value,unit,time,zone_pressures\n1,thickness,500,nm,60 s,3.1 3.0 2.9 psi\n")
+    with pytest.raises(ValueError, match=r"zp.csv:2: row 1, column 'zone_pressures': .*holds more than one number"):
+        read_all([p])
