@@ -258,3 +258,12 @@ def test_zone_pressures_separated_by_spaces_are_refused(tmp_path):
     p = _write(tmp_path, "zp.csv", "wafer,quantity,value,unit,time,zone_pressures\n1,thickness,500,nm,60 s,3.1 3.0 2.9 psi\n")
     with pytest.raises(ValueError, match=r"zp.csv:2: row 1, column 'zone_pressures': .*holds more than one number"):
         read_all([p])
+
+
+@pytest.mark.parametrize("header, row, column", [(H, "removal_rate,249,5,nm/min,5 psi,63 rpm,copper", "value"),
+                                                 ("quantity,value,unit,process,line_width", "dishing,1,497,A,copper,1 um", "value")])
+def test_an_unquoted_decimal_comma_is_named_in_the_field_count(tmp_path, header, row, column):
+    # said only "7 fields but the header has 6"
+    p = _write(tmp_path, "eu.csv", f"{header}\n{row}\n")
+    with pytest.raises(ValueError, match=rf"eu.csv:2: row 1: .* fields but the header has .*column '{column}': '[0-9]+,[0-9]+', a decimal comma"):
+        read_all([p])

@@ -10,7 +10,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint", "fields_hint"]
 
 
 @contextlib.contextmanager
@@ -196,6 +196,18 @@ def _csv_line(values) -> str:
     buf = io.StringIO()
     csv.writer(buf, lineterminator="").writerow(values)
     return buf.getvalue()
+
+
+def fields_hint(row: list[str], header: list[str]) -> str:
+    """A hint for a row with more fields than its ``header`` where a comma split a number (``249,5`` unquoted: a decimal
+    comma, or ``1,497``: a thousands separator), naming the column; "" otherwise."""
+    if len(row) <= len(header):
+        return ""
+    for k, (a, b) in enumerate(zip(row[: len(header)], row[1:])):
+        if re.search(r"[0-9]$", a.strip()) and re.match(r"[0-9]{1,3}(\s|$)", b.strip()):
+            return (f" (column {header[k]!r}: '{a.strip()},{b.strip()}', a decimal comma or a thousands separator splitting a number? "
+                    "write it with a decimal point and no separator)")
+    return ""
 
 
 def delimiter_hint(header_text: str) -> str:

@@ -189,7 +189,7 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    from ..io import comments_and_rows, delimiter_hint, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, fields_hint, tidy_csv
 
     meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
@@ -216,7 +216,8 @@ def read_measurements(path, text: str | None = None) -> list:
     for (lineno, _), row in zip(body[1:], csv.reader([t for _, t in body[1:]])):
         where = f"{path}:{lineno}"
         if len(row) != len(header):
-            raise MeasurementError(f"{where}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
+            raise MeasurementError(f"{where}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})"
+                                   + fields_hint(row, header))
         rec = {h: c.strip() for h, c in zip(header, row)}
         rec.setdefault("unit", "")
         q = rec["quantity"]

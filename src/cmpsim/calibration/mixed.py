@@ -99,7 +99,10 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
     for row_no, ((lineno, ln), row) in enumerate(zip(body[1:], csv.reader([t for _, t in body[1:]])), start=1):
         rows[lineno] = row_no
         if len(row) != len(header):
-            raise MixedDataError(f"{path}:{lineno}: row {row_no}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
+            from ..io import fields_hint
+
+            raise MixedDataError(f"{path}:{lineno}: row {row_no}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})"
+                                 + fields_hint(row, header))
         parsed[lineno] = row
         fam_of_line[lineno] = family_of(row[q_at].strip(), row[w_at].strip() if w_at is not None else "")
     _lot_row_without_wafer(path, header, parsed, fam_of_line, rows)

@@ -261,7 +261,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import comments_and_rows, delimiter_hint, read_text, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, fields_hint, read_text, tidy_csv
 
     path = Path(path)
     if text is None:
@@ -306,7 +306,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             return DataError(f"{path}:{lineno}: row {row_no}, column {column!r}: {message}")
 
         if len(row) != len(header):
-            raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}")
+            raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}" + fields_hint(row, header))
         rec = {h: c.strip() for h, c in zip(header, row)}
         rec.setdefault("unit", "")
         quantity = rec["quantity"]
