@@ -267,3 +267,16 @@ def test_an_unquoted_decimal_comma_is_named_in_the_field_count(tmp_path, header,
     p = _write(tmp_path, "eu.csv", f"{header}\n{row}\n")
     with pytest.raises(ValueError, match=rf"eu.csv:2: row 1: .* fields but the header has .*column '{column}': '[0-9]+,[0-9]+', a decimal comma"):
         read_all([p])
+
+
+@pytest.mark.parametrize(
+    "rows, where",
+    [("removal_rate,150,nm/min,shape\n", r"shape.csv:2: row 1, column 'comparison': shape data set 'shape' needs at least 2 points"),
+     ("removal_rate,150,nm/min,shape\nremoval_rate,160,nm/min,absolute\n", r"shape.csv:3: row 2, column 'comparison': .* mixes comparison modes"),
+     ("removal_rate,150,nm/min,shape\nfluid_load_fraction,0.5,1,shape\n", r"shape.csv:3: row 2, column 'quantity': shape data set 'shape' must hold one")],
+)
+def test_a_data_set_that_cannot_be_compared_names_the_row(tmp_path, rows, where):
+    # named the file only
+    p = _write(tmp_path, "shape.csv", "quantity,value,unit,comparison\n" + rows)
+    with pytest.raises(ValueError, match=where):
+        read_all([p])

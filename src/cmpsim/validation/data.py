@@ -381,13 +381,19 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     for ds in datasets.values():
         _one_unit(ds)
         modes = {p.comparison for p in ds.points}
+        first = ds.points[0]
         if len(modes) > 1:
-            raise DataError(f"{path}: data set {ds.name!r} mixes comparison modes {sorted(modes)}; use one per data set")
+            other = next(p for p in ds.points if p.comparison != first.comparison)
+            raise DataError(f"{path}:{other.line}: row {other.row}, column 'comparison': data set {ds.name!r} mixes comparison modes "
+                            f"{sorted(modes)} ({first.comparison!r} in line {first.line}); use one per data set")
         if ds.comparison == "shape":
             if len({p.quantity for p in ds.points}) > 1:
-                raise DataError(f"{path}: shape data set {ds.name!r} must hold one quantity")
+                other = next(p for p in ds.points if p.quantity != first.quantity)
+                raise DataError(f"{path}:{other.line}: row {other.row}, column 'quantity': shape data set {ds.name!r} must hold one quantity "
+                                f"({first.quantity!r} in line {first.line})")
             if len(ds.points) < 2:
-                raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
+                raise DataError(f"{path}:{first.line}: row {first.row}, column 'comparison': shape data set {ds.name!r} needs at least 2 points "
+                                "(a scale fitted to one point says nothing; use 'absolute')")
     return list(datasets.values())
 
 
