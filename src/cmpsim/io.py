@@ -10,7 +10,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint", "fields_hint"]
 
 
 @contextlib.contextmanager
@@ -50,14 +50,21 @@ def read_text(path: Path, what: str, error: type[Exception] = ValueError) -> str
     it would glue itself to the first column name or hide the first comment line.
     """
     path = Path(path)
+    save = "(save it as UTF-8, e.g. a spreadsheet's 'CSV UTF-8')"
     try:
-        return path.read_text(encoding="utf-8-sig")
+        data = path.read_bytes()
     except FileNotFoundError:
         raise error(f"{what} {str(path)!r} does not exist") from None
-    except UnicodeDecodeError as exc:
-        raise error(f"{what} {str(path)!r} is not UTF-8 text: {exc} (save it as UTF-8, e.g. a spreadsheet's 'CSV UTF-8')") from None
     except OSError as exc:
         raise error(f"cannot read {what} {str(path)!r}: {exc}") from None
+    if data.startswith((b"\xff\xfe", b"\xfe\xff")) or b"\x00" in data[:4096]:  # a spreadsheet's "Unicode text": every other byte 0
+        raise error(f"{what} {str(path)!r} is UTF-16 text, not UTF-8 {save}")
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        raise error(f"{what} {str(path)!r} is not UTF-8 text: line {line} has the byte {data[exc.start:exc.start + 1]!r} "
+                    f"({exc.reason}; a Windows or Latin-1 export writes 'µ' and 'Å' so) {save}") from None
 
 
 def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]:
@@ -84,7 +91,7 @@ def comments_and_rows(text: str) -> tuple[dict[str, str], list[tuple[int, str]]]
 NAME_COLUMNS = ("quantity", "comparison", "process", "film")
 #: Columns that hold no quantity: a unit in their header (``wafer (#)``) is dropped, not given to their cells.
 TEXT_COLUMNS = NAME_COLUMNS + ("dataset", "wafer", "source", "label", "note", "unit")
-_HEADER_UNIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*[\(\[]\s*(.*?)\s*[\)\]]\s*$")
+_HEADER_UNIT = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:[\(\[]\s*(.*?)\s*[\)\]]|,\s*(.*?))\s*$")
 
 
 def tidy_csv(text: str, path="") -> str:
@@ -104,6 +111,14 @@ def tidy_csv(text: str, path="") -> str:
     body = [i for i, ln in enumerate(lines) if ln.strip() and not ln.strip().startswith("#")]
     if not body:
         return text
+    sep = re.fullmatch(r"\s*sep=(.?)\s*,*\s*", lines[body[0]], flags=re.I)
+    if sep:  # Excel's "sep=;" line names the separator: a comma is this reader's, anything else is refused
+        if sep.group(1) != ",":
+            raise ValueError(f"{path}:{body[0] + 1}: the line {lines[body[0]].strip()!r} says the file is separated by "
+                             f"{sep.group(1)!r}: cmpsim reads comma-separated files with a decimal point; export the sheet "
+                             "as CSV with ',' as the separator")
+        lines[body[0]] = ""
+        return tidy_csv("\n".join(lines) + "\n", path)
     header = next(csv.reader([lines[body[0]]]))
     n = len(header)
     while n > 1 and not header[n - 1].strip():
@@ -112,8 +127,13 @@ def tidy_csv(text: str, path="") -> str:
     for k, h in enumerate(header[:n]):  # "value (nm/min)", "applied_pressure [psi]": the unit of the column's plain numbers
         m = _HEADER_UNIT.match(h)
         names.append((m.group(1) if m else h.strip()).lower())
-        if m and m.group(2) and names[-1] not in TEXT_COLUMNS:
-            header_units[k] = m.group(2)
+        if m and (m.group(2) or m.group(3)) and names[-1] not in TEXT_COLUMNS:
+            header_units[k] = m.group(2) or m.group(3)
+    if "" in names:  # an empty column of the sheet between two others: "unknown column ''" did not say which
+        k = names.index("")
+        raise ValueError(f"{path}:{body[0] + 1}: header, column {k + 1} ({f'after {names[k - 1]!r}' if k else 'the first'}) has no name: "
+                         "delete the sheet's empty column, or name it (note, source, label)")
+    _refuse_hidden_rows(lines, body[0], names, path)
     changed = False
     if names != [h.strip() for h in header]:
         lines[body[0]] = _csv_line(names)
@@ -142,6 +162,27 @@ def tidy_csv(text: str, path="") -> str:
     return "\n".join(lines) + "\n" if changed else text
 
 
+def _refuse_hidden_rows(lines: list[str], header_at: int, names: list[str], path) -> None:
+    """ValueError naming the line of a ``#`` line after the header that has the header's fields (``#1,removal_rate,150,...``):
+    a data row whose first cell begins with ``#`` (a label, a wafer ``#3``) that would be read as a comment and dropped."""
+    if len(names) < 3:  # too few columns to tell a row from a comment with commas
+        return
+    row = 0
+    for i in range(header_at + 1, len(lines)):
+        s = lines[i].strip()
+        if s and not s.startswith("#"):
+            row += 1
+        if not s.startswith("#"):
+            continue
+        cells = next(csv.reader([s]), [])
+        while len(cells) > len(names) and not cells[-1].strip():
+            cells.pop()
+        if len(cells) == len(names) and sum(bool(c.strip()) for c in cells) >= 3:
+            raise ValueError(f"{path}:{i + 1}: row {row + 1}, column {names[0]!r}: the line starts with '#' but has the header's "
+                             f"{len(names)} fields: a data row whose first cell begins with '#' ({cells[0].strip()!r}) would be read as a "
+                             f"comment and dropped; quote the cell (\"{cells[0].strip()}\"), drop the '#', or put another column first")
+
+
 def is_number(text: str) -> bool:
     """Whether ``text`` reads as a float."""
     try:
@@ -157,10 +198,22 @@ def _csv_line(values) -> str:
     return buf.getvalue()
 
 
+def fields_hint(row: list[str], header: list[str]) -> str:
+    """A hint for a row with more fields than its ``header`` where a comma split a number (``249,5`` unquoted: a decimal
+    comma, or ``1,497``: a thousands separator), naming the column; "" otherwise."""
+    if len(row) <= len(header):
+        return ""
+    for k, (a, b) in enumerate(zip(row[: len(header)], row[1:])):
+        if re.search(r"[0-9]$", a.strip()) and re.match(r"[0-9]{1,3}(\s|$)", b.strip()):
+            return (f" (column {header[k]!r}: '{a.strip()},{b.strip()}', a decimal comma or a thousands separator splitting a number? "
+                    "write it with a decimal point and no separator)")
+    return ""
+
+
 def delimiter_hint(header_text: str) -> str:
     """A hint for a header that is not comma-separated (``quantity;value;unit``): "" when it is."""
     for sep, name in ((";", "semicolons"), ("\t", "tabs")):
-        if sep in header_text and "," not in header_text:
+        if header_text.count(sep) > header_text.count(","):  # "quantity;value;unit;note, free": a comma inside a name
             return (f" (the header is separated by {name}: cmpsim reads comma-separated files with a decimal point; "
                     "export the sheet as CSV with ',' as the separator)")
     return ""

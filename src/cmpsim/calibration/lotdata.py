@@ -77,7 +77,7 @@ def _length(rec: dict, column: str, unit: str, where: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number") from None
+        raise LotDataError(f"{where}: column {column!r}: {text!r} is not a number{units.placeholder_hint(text)}") from None
     try:
         si = float(units.convert(v, unit, "m"))
     except Exception as exc:  # noqa: BLE001 - pint's errors: a unit that is not a length
@@ -104,6 +104,9 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
     if not body:
         raise LotDataError(f"{path}: no header row and no data rows")
     header = [h.strip() for h in next(csv.reader([body[0][1]]))]
+    repeated = sorted({h for h in header if header.count(h) > 1})
+    if repeated:  # the row's dict would keep the last of them silently
+        raise LotDataError(f"{path}:{body[0][0]}: column {repeated[0]!r}: a column name is repeated in the header ({', '.join(header)})")
     for col in header:
         if col not in LOT_COLUMNS:
             raise LotDataError(f"{path}:{body[0][0]}: column {col!r} has no meaning for a lot row; lot rows take {', '.join(LOT_COLUMNS)}")
@@ -143,6 +146,14 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
             unc = _length(rec, "uncertainty", unit, where)
             if not unc > 0:
                 raise LotDataError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")
+        film = rec.get("film") or None
+        if film is not None:
+            from ..inputs.config import PARAMETERS
+            from ..validation.data import film_hint
+
+            if film not in PARAMETERS["film"].choices:  # "cu" was kept, and refused against the recipe's "copper" only with --recipe
+                raise LotDataError(f"{where}: column 'film': {rec['film']!r} is not a film of cmpsim; one of "
+                                   f"{', '.join(PARAMETERS['film'].choices)}{film_hint(film)}")
         from .measurements import MeasurementError, read_polish_time
 
         try:
@@ -159,7 +170,7 @@ def read_lot_rows(path, text: str) -> list[LotRecord]:
                 raise LotDataError(f"{where}: {exc}") from None
             if not all(math.isfinite(v) and v > 0 for v in zp):
                 raise LotDataError(f"{where}: column 'zone_pressures' = {rec['zone_pressures']!r}: every pressure must be > 0")
-        out.append(LotRecord(wafer, q, value, unc, rec.get("film") or None, rec.get("dataset") or meta.get("dataset") or path.stem,
+        out.append(LotRecord(wafer, q, value, unc, film, rec.get("dataset") or meta.get("dataset") or path.stem,
                              lineno, rec.get("source", ""), rec.get("label", ""), str(path), t, zp))
     check_once(out)
     return out

@@ -116,12 +116,16 @@ def shipped_measurement_paths(kind: str = "die") -> list[Path]:
     return sorted(p for p in root.iterdir() if p.name.startswith(prefix) and p.suffix == ".csv")
 
 
+#: The unit a message suggests for a cell without one, by SI unit: lengths of structures in um, flows in mL/min.
+_EXAMPLE_UNITS = {"m": "um", "m^3/s": "mL/min", "m/s": "nm/s", "Pa": "psi"}
+
+
 def _quantity(text: str, unit: str, target: str, where: str, column: str) -> float:
     from ..inputs import units
 
     try:
         if unit is None:
-            return float(units.to_si(text, target, column))
+            return float(units.to_si(text, target, column, example=_EXAMPLE_UNITS.get(target, target)))
         v = float(text)
         if not math.isfinite(v):
             raise ValueError("not finite")
@@ -152,7 +156,8 @@ def _length(rec, column, where, required=False, positive=True):
         return None
     v = _quantity(text, None, "m", where, column)
     if not math.isfinite(v) or (positive and v <= 0):
-        raise MeasurementError(f"{where}: column {column!r} = {text!r} must be a length > 0")
+        why = " (a space of 0 would make the block one solid line; leave the cell empty for an isolated line in a field)" if column == "line_space" else ""
+        raise MeasurementError(f"{where}: column {column!r} = {text!r} must be a length > 0{why}")
     return v
 
 
@@ -184,7 +189,7 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    from ..io import comments_and_rows, delimiter_hint, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, fields_hint, tidy_csv
 
     meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
@@ -196,7 +201,8 @@ def read_measurements(path, text: str | None = None) -> list:
         if required not in header:
             raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(htext))
     if len(set(header)) != len(header):
-        raise MeasurementError(f"{where0}: a column name is repeated in the header")
+        twice = sorted({h for h in header if header.count(h) > 1})
+        raise MeasurementError(f"{where0}: column {twice[0]!r}: a column name is repeated in the header ({', '.join(header)})")
     for col in header:
         if col in _COMMON or col in _STRUCTURE_COLUMNS or col in DIE_PARAMETERS or col in _THERMAL_EXTRA or col in PARAMETERS:
             continue
@@ -210,14 +216,15 @@ def read_measurements(path, text: str | None = None) -> list:
     for (lineno, _), row in zip(body[1:], csv.reader([t for _, t in body[1:]])):
         where = f"{path}:{lineno}"
         if len(row) != len(header):
-            raise MeasurementError(f"{where}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
+            raise MeasurementError(f"{where}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})"
+                                   + fields_hint(row, header))
         rec = {h: c.strip() for h, c in zip(header, row)}
         rec.setdefault("unit", "")
         q = rec["quantity"]
         if q not in STRUCTURE_QUANTITIES and q not in THERMAL_QUANTITIES:
             raise MeasurementError(f"{where}: column 'quantity': unknown quantity {q!r}; known: "
                                    f"{', '.join(list(STRUCTURE_QUANTITIES) + list(THERMAL_QUANTITIES))}")
-        from ..inputs.units import read_value_cells
+        from ..inputs.units import placeholder_hint, read_value_cells
 
         try:  # "50 nm", "±4 nm"
             read_value_cells(rec)
@@ -234,7 +241,7 @@ def read_measurements(path, text: str | None = None) -> list:
         try:
             float(rec["value"])
         except ValueError:
-            raise MeasurementError(f"{where}: column 'value': {rec['value']!r} is not a number") from None
+            raise MeasurementError(f"{where}: column 'value': {rec['value']!r} is not a number{placeholder_hint(rec['value'])}") from None
         if q == "pad_temperature_rise":  # a difference of temperatures: a degree Celsius is a kelvin, a degree Fahrenheit 5/9 K
             unit = _temperature_difference_unit(rec["unit"])
         else:
@@ -245,7 +252,8 @@ def read_measurements(path, text: str | None = None) -> list:
             try:
                 float(rec["uncertainty"])
             except ValueError:
-                raise MeasurementError(f"{where}: column 'uncertainty': {rec['uncertainty']!r} is not a number") from None
+                raise MeasurementError(f"{where}: column 'uncertainty': {rec['uncertainty']!r} is not a number"
+                                       f"{placeholder_hint(rec['uncertainty'])}") from None
             unc = _quantity(rec["uncertainty"], unit, target, where, "uncertainty")
             if not unc > 0:
                 raise MeasurementError(f"{where}: column 'uncertainty' must be > 0 (or empty); got {rec['uncertainty']!r}")

@@ -99,14 +99,18 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
     for row_no, ((lineno, ln), row) in enumerate(zip(body[1:], csv.reader([t for _, t in body[1:]])), start=1):
         rows[lineno] = row_no
         if len(row) != len(header):
-            raise MixedDataError(f"{path}:{lineno}: row {row_no}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})")
+            from ..io import fields_hint
+
+            raise MixedDataError(f"{path}:{lineno}: row {row_no}: {len(row)} fields but the header has {len(header)} (columns {', '.join(header)})"
+                                 + fields_hint(row, header))
         parsed[lineno] = row
         fam_of_line[lineno] = family_of(row[q_at].strip(), row[w_at].strip() if w_at is not None else "")
+    _lot_row_without_wafer(path, header, parsed, fam_of_line, rows)
     families = sorted(set(fam_of_line.values()))
     reader = {"film": "film", "structure": "measurement", "pad": "measurement", "lot": "lot"}
     groups = sorted({reader[f] for f in families})
-    if not groups:
-        return {"film": (text, rows)}  # no data row: the data-set reader says so ("no data rows")
+    if not groups:  # no data row: said before the film reader refuses the columns of a structure or lot template
+        raise MixedDataError(f"{path}:{body[0][0]}: the file has a header but no data rows (header: {', '.join(header)})")
     # a column of another family that no row fills (a template's structure columns, a wafer column without lots) is
     # dropped; a name no family knows is still refused by the reader
     empty = {k for k in range(len(header)) if not any(parsed[i][k].strip() for i in parsed)}
@@ -140,6 +144,21 @@ def _split(path: Path, text: str) -> dict[str, tuple[str, dict[int, int]]]:
                 new.append(ln)
         out[g] = ("\n".join(new) + "\n", rows)
     return out
+
+
+def _lot_row_without_wafer(path, header, parsed, fam_of_line, rows) -> None:
+    """MixedDataError naming the ``wafer`` of a row that lost its wafer number among a lot's rows: a ``thickness`` without
+    ``initial_thickness`` or a ``removal`` without ``time`` cannot be a film row, whose refusal ("needs the time column")
+    would not say that the wafer is missing."""
+    if "lot" not in fam_of_line.values():
+        return
+    at = {c: header.index(c) for c in ("quantity", "time", "initial_thickness") if c in header}
+    for line, row in parsed.items():
+        q = row[at["quantity"]].strip()
+        needs = {"thickness": "initial_thickness", "removal": "time"}.get(q)
+        if fam_of_line[line] == "film" and needs and not (needs in at and row[at[needs]].strip()):
+            raise MixedDataError(f"{path}:{line}: row {rows[line]}, column 'wafer': empty, but the file's other rows are a lot's wafers: "
+                                 f"give this {q} its wafer (a {q} of a blanket film, without a wafer, needs the {needs} column)")
 
 
 def _csv_line(values) -> str:

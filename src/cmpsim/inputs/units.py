@@ -26,7 +26,7 @@ from typing import Any
 
 from ..io import is_number
 
-__all__ = ["normalise_unit", "value_and_unit", "uncertainty_text", "read_value_cells", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
+__all__ = ["placeholder_hint", "normalise_unit", "value_and_unit", "uncertainty_text", "read_value_cells", "registry", "parse", "parse_list", "to_display", "format_display", "to_si", "convert", "unit_text"]
 
 #: Unit spellings found in data files that pint does not read as meant.
 ALIASES = {"a/min": "angstrom/minute", "å/min": "angstrom/minute", "a/s": "angstrom/second", "å/s": "angstrom/second", "%": "percent", "-": "dimensionless", "1": "dimensionless", "": "dimensionless"}
@@ -76,12 +76,16 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
 
     Raises ``ValueError`` when the cell's unit and the unit column disagree (the value is not guessed).
     """
+    if re.search(r"[0-9]_[0-9]", value):  # Python's float() reads "1_497" as 1497: a separator, refused as a comma is
+        raise ValueError(f"{value!r} is not a number (a thousands separator? write the number with a decimal point and no separator)")
     m = _NUMBER.match(value)
     if not m or not m.group(2).strip():
         return value, unit
     inside = m.group(2).strip()
+    if uncertainty_text(inside) != inside:  # "150 ± 10 nm/min": not guessed which unit the 10 is in, nor read as a number
+        raise ValueError(f"{value!r} holds an uncertainty: give the value here and its uncertainty in the uncertainty column")
     if not (inside[0].isalpha() or inside[0] in "%°µμÅ"):  # "1,500" or "1.5.2": not a number and a unit; the reader says it is no number
-        if inside[0] == "," and inside[1:].isdigit():
+        if inside[0] == "," and inside[1:2].isdigit():  # "1,500", "1,5 nm"
             raise ValueError(f"{value!r} is not a number (a thousands separator or a decimal comma? write the number with a decimal "
                              "point and no separator)")
         return value, unit
@@ -155,6 +159,21 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
         raise ValueError(f"{name} must be a number with units of {unit or 'none'}; got {value!r}")
     if isinstance(value, (int, float)):
         return float(value)
+    if isinstance(value, str):
+        return _text_to_si(value, unit, name, example)
+    return _quantity_to_si(value, unit, name, example)
+
+
+@lru_cache(maxsize=4096)
+def _text_to_si(value: str, unit: str, name: str, example: str | None) -> float:
+    """:func:`to_si` of a text, remembered: a data file's column repeats a few texts over thousands of rows, and pint
+    parses each in about 0.2 ms."""
+    _refuse_misread(value, name)
+    return _quantity_to_si(value, unit, name, example)
+
+
+def _quantity_to_si(value: Any, unit: str, name: str, example: str | None) -> float:
+    """:func:`to_si` of a text or a pint Quantity."""
     try:
         q = registry().Quantity(value) if isinstance(value, str) else value
     except Exception as exc:  # pint raises several error types for bad strings
@@ -175,11 +194,54 @@ def to_si(value: Any, unit: str, name: str = "value", example: str | None = None
         if fixed is not None:
             _check_angle(fixed, target, name, value)
             return float(fixed.to(target).magnitude)
+        if isinstance(value, str) and is_number(value.strip()):
+            raise ValueError(f"{name}: {value!r} has no unit (the wrong dimension for units of {target!r}); write it with its unit "
+                             f"(e.g. '{value.strip()} {example or target}')") from None
         raise ValueError(
             f"{name}: {value!r} has the wrong dimension; expected units convertible to {target!r} (e.g. {example or target})"
         ) from None
     _check_angle(q, target, name, value)
     return out
+
+
+#: Cells that stand for "no value" in spreadsheets and papers (lower case): refused with :func:`placeholder_hint`.
+PLACEHOLDERS = ("-", "--", "\u2013", "\u2014", "n/a", "na", "n.a.", "none", "null", "?", "nd", "n.d.")
+
+
+def placeholder_hint(text: str) -> str:
+    """" (... leave the cell empty ...)" for a cell that stands for no value (``-``, ``n/a``); "" for any other text."""
+    if text.strip().lower() not in PLACEHOLDERS:
+        return ""
+    return (f" ({text.strip()!r} stands for no value: leave the cell empty where the column is optional and the value not known, "
+            "or leave out the row)")
+
+
+_CLOCK = re.compile(r"^\s*\d+(:\d+){1,2}(\.\d*)?\s*$")
+
+
+#: A unit word's power (``cm2``, ``m^3``, ``min-1``, ``s**-1``) or a leading ``1/``: the digits a unit may hold.
+_UNIT_POWER = re.compile(r"(?<=[A-Za-zµμÅå°%)])(\^|\*\*)?-?[0-9]+|^1\s*/")
+
+
+def _refuse_misread(text: str, name: str) -> None:
+    """ValueError for a quantity pint would read other than as written: with a comma (``"3,5 psi"``, ``"1,500 nm"``:
+    pint drops it and reads 35 psi, 1500 nm; a decimal comma or a thousands separator is not guessed), with a second
+    number (``"93/87 rpm"``, a platen and a head speed, read as 1.07 rpm; ``"34 500 Pa"`` read as 34 x 500 Pa;
+    ``"2 3 psi"``), a time written as a clock (``"1:30"``: minutes and seconds, or hours and minutes?), and a cell
+    that stands for no value (``"-"``)."""
+    if "," in text or re.search(r"[0-9]_[0-9]", text):
+        raise ValueError(f"{name}: {text!r} has a {'comma' if ',' in text else 'digit separator'}: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
+                         "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
+                         "('3.5 psi', '1500 nm')")
+    if placeholder_hint(text):  # pint's message for "-" is "()"
+        raise ValueError(f"{name}: {text!r} is not a quantity{placeholder_hint(text)}")
+    if _CLOCK.match(text):  # "1:30": pint reads a ratio of 1 and 30
+        raise ValueError(f"{name}: {text!r} is written as a clock (minutes:seconds? hours:minutes?), which is not guessed; "
+                         "write one number with its unit ('90 s', '1.5 min')")
+    m = _NUMBER.match(text)
+    if m and any(c in "0123456789" for c in _UNIT_POWER.sub("", m.group(2))):  # pint multiplies or divides the numbers
+        raise ValueError(f"{name}: {text!r} holds more than one number (two settings such as a platen and a head speed, a range, "
+                         "a thousands separator written as a space?), which pint would multiply or divide; write one number and its unit")
 
 
 #: Words of pint's angle units: a rotation speed must name one (``rpm``, ``rad/s``, ``deg/s``, ``rev/min``).

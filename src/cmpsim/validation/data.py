@@ -248,7 +248,7 @@ def _parse_float(text: str, what: str, where: str) -> float:
     try:
         v = float(text)
     except ValueError:
-        raise DataError(f"{where}: {what} {text!r} is not a number") from None
+        raise DataError(f"{where}: {what} {text!r} is not a number{units.placeholder_hint(text)}") from None
     if not math.isfinite(v):
         raise DataError(f"{where}: {what} {text!r} is not finite")
     return v
@@ -261,7 +261,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import comments_and_rows, delimiter_hint, read_text, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, fields_hint, read_text, tidy_csv
 
     path = Path(path)
     if text is None:
@@ -276,7 +276,8 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
         if required not in header:
             raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(header_text))
     if len(set(header)) != len(header):
-        raise DataError(f"{where0}: duplicate column names in the header")
+        twice = sorted({h for h in header if header.count(h) > 1})
+        raise DataError(f"{where0}: header, column {twice[0]!r}: duplicate column names in the header ({', '.join(header)})")
     for col in header:
         if col in META_COLUMNS or col in EXTRA_CONDITIONS or col in POINT_COLUMNS:
             continue
@@ -295,6 +296,8 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     default_name = meta.get("dataset") or path.stem
     default_comparison = (meta.get("comparison") or "absolute").split()[0].strip(" -:,").lower()
     datasets: dict[str, Dataset] = {}
+    base = Config.default()
+    checked: set = set()  # the cells and rows of conditions already checked (10,000 rows repeat a few settings)
     rows = csv.reader([t for _, t in body_lines[1:]])
     for row_no, ((lineno, _), row) in enumerate(zip(body_lines[1:], rows), start=1):
         where = f"{path}:{lineno}"
@@ -303,7 +306,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             return DataError(f"{path}:{lineno}: row {row_no}, column {column!r}: {message}")
 
         if len(row) != len(header):
-            raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}")
+            raise DataError(f"{where}: row {row_no}: {len(row)} fields but the header has {len(header)}" + fields_hint(row, header))
         rec = {h: c.strip() for h, c in zip(header, row)}
         rec.setdefault("unit", "")
         quantity = rec["quantity"]
@@ -356,16 +359,19 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
             if col in META_COLUMNS or col in POINT_COLUMNS or not rec[col]:
                 continue
             conditions[col] = rec[col]
-        base = Config.default()
         for col, text in conditions.items():  # each column alone first: the error names it
+            if (col, text) not in checked:
+                try:
+                    point_config(base, {col: text})
+                except ValueError as exc:
+                    raise bad(col, str(exc) + (film_hint(text) if col == "film" else "")) from None
+                checked.add((col, text))
+        if tuple(conditions.items()) not in checked:
             try:
-                point_config(base, {col: text})
+                point_config(base, conditions)
             except ValueError as exc:
-                raise bad(col, str(exc)) from None
-        try:
-            point_config(base, conditions)
-        except ValueError as exc:
-            raise bad(", ".join(conditions), str(exc)) from None
+                raise bad(", ".join(conditions), str(exc)) from None
+            checked.add(tuple(conditions.items()))
         name = rec.get("dataset") or default_name
         p = DataPoint(name, quantity, value, unit, uncertainty, comparison, conditions, rec.get("source", ""), lineno, rec.get("label", ""), place, row_no, str(path))
         ds = datasets.setdefault(name, Dataset(name, [], dict(meta), path))
@@ -375,14 +381,32 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     for ds in datasets.values():
         _one_unit(ds)
         modes = {p.comparison for p in ds.points}
+        first = ds.points[0]
         if len(modes) > 1:
-            raise DataError(f"{path}: data set {ds.name!r} mixes comparison modes {sorted(modes)}; use one per data set")
+            other = next(p for p in ds.points if p.comparison != first.comparison)
+            raise DataError(f"{path}:{other.line}: row {other.row}, column 'comparison': data set {ds.name!r} mixes comparison modes "
+                            f"{sorted(modes)} ({first.comparison!r} in line {first.line}); use one per data set")
         if ds.comparison == "shape":
             if len({p.quantity for p in ds.points}) > 1:
-                raise DataError(f"{path}: shape data set {ds.name!r} must hold one quantity")
+                other = next(p for p in ds.points if p.quantity != first.quantity)
+                raise DataError(f"{path}:{other.line}: row {other.row}, column 'quantity': shape data set {ds.name!r} must hold one quantity "
+                                f"({first.quantity!r} in line {first.line})")
             if len(ds.points) < 2:
-                raise DataError(f"{path}: shape data set {ds.name!r} needs at least 2 points")
+                raise DataError(f"{path}:{first.line}: row {first.row}, column 'comparison': shape data set {ds.name!r} needs at least 2 points "
+                                "(a scale fitted to one point says nothing; use 'absolute')")
     return list(datasets.values())
+
+
+#: Names of films in papers and fab logs (lower case) -> the film of cmpsim they would be; only named in a refusal, never
+#: read as it: which removal law a fab's oxide (thermal, TEOS, HDP) or barrier (Ta, TaN, Ti, TiN) follows is the user's choice.
+FILM_WORDS = {"cu": "copper", "sio2": "oxide", "teos": "oxide", "peteos": "oxide", "pe-teos": "oxide", "hdp": "oxide", "ild": "oxide",
+              "thermal oxide": "oxide", "w": "tungsten", "ta": "barrier", "tan": "barrier", "ti": "barrier", "tin": "barrier"}
+
+
+def film_hint(text: str) -> str:
+    """" (for 'Cu' write copper ...)" for a film named as papers name it ("" for other names)."""
+    film = FILM_WORDS.get(" ".join(text.lower().split()))
+    return f" (for {text.strip()!r} write {film!r}, if its removal law is cmpsim's {film})" if film else ""
 
 
 def _near(name: str, names) -> str:
@@ -409,7 +433,10 @@ def _one_unit(ds: Dataset) -> None:
 
 def _uncertainty(text: str, unit: str, quantity: str, where: str, bad) -> float:
     """The uncertainty cell in the row's ``unit``: a number, or a number with a unit of the quantity (``"10 nm/min"``)."""
-    number, own = units.value_and_unit(units.uncertainty_text(text), "")
+    try:
+        number, own = units.value_and_unit(units.uncertainty_text(text), "")
+    except ValueError as exc:  # "1,5": a decimal comma or a thousands separator
+        raise bad("uncertainty", str(exc)) from None
     try:
         u = _parse_float(number, "uncertainty", where)
     except DataError as exc:
