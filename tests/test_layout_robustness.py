@@ -156,3 +156,55 @@ def test_cmpsim_die_without_a_layer_lists_the_files_layers(tmp_path):
     said = " ".join(res.output.split())
     assert "needs --layer" in said and said.rstrip().endswith("chip.gds's layers with shapes: 8/0, 10/22")  # the text layer is not one
     assert not (tmp_path / "out").exists()
+
+
+def _leaf_in_top(at=(0, 0), trans=None, leaf_box=(0, 0, 1000, 1000)):
+    """TOP (a 100 um square) placing LEAF (a box) once, by ``trans`` (a KLayout transformation) or at ``at``."""
+    ly = kdb.Layout()
+    ly.dbu = 0.001
+    l1 = ly.layer(1, 0)
+    top, leaf = ly.create_cell("TOP"), ly.create_cell("LEAF")
+    leaf.shapes(l1).insert(kdb.Box(*leaf_box))
+    top.shapes(l1).insert(kdb.Box(0, 0, 100000, 100000))
+    return ly, top, leaf
+
+
+@pytest.mark.parametrize("case", ["magnified", "translated", "wrapped", "array"])
+def test_a_placement_past_klayouts_coordinates_is_named(tmp_path, case):
+    """Placements whose shapes land past 2**31 dbu, legal in GDSII/OASIS: KLayout's boxes overflow there. A magnified one
+    came out at -2**31 (a traceback from KLayout's merge, or a 2 m die of 11 billion windows); a translated one wrapped round
+    and was dropped from the die's box, its shapes silently left out (density 1.0 over the 100 um square alone). Refused,
+    naming the placement; --top the cell it places is still extracted."""
+    ly, top, leaf = _leaf_in_top(leaf_box=(0, 0, 1_500_000_000, 2_000_000) if case == "translated" else (0, 0, 1000, 1000))
+    place = {"magnified": kdb.CellInstArray(leaf.cell_index(), kdb.ICplxTrans(5e6, 0, False, 0, 0)),
+             "translated": kdb.CellInstArray(leaf.cell_index(), kdb.Trans(1_500_000_000, 0)),
+             "wrapped": kdb.CellInstArray(leaf.cell_index(), kdb.Trans(MAX - 999, 0)),  # its right edge on 2**31
+             "array": kdb.CellInstArray(leaf.cell_index(), kdb.Trans(), kdb.Vector(1_100_000_000, 0), kdb.Vector(0, 2000), 3, 2)}[case]
+    top.insert(place)
+    options = kdb.SaveLayoutOptions()
+    options.format = "OASIS"  # GDSII cannot hold the array's corners
+    path = str(tmp_path / "far.oas")
+    ly.write(path, options)
+    reach = {"magnified": "5,000,000,000", "translated": "3,000,000,000", "wrapped": "2,147,483,648", "array": "2,200,001,000"}[case]
+    with pytest.raises(ValueError, match=rf"far.oas: the placement of cell 'LEAF' in 'TOP' at .* puts shapes {reach} dbu from the origin "
+                                         r".* past KLayout's 32-bit coordinates .* choose a cell below it with --top, or fix the placement"):
+        extract_windows(path, "1/0", 20 * UM)
+    assert extract_windows(path, "1/0", 1 * UM if case != "translated" else 1000 * UM, top="LEAF").density.max() == 1.0
+    ly2, top2, leaf2 = _leaf_in_top()
+    top2.insert(kdb.CellInstArray(leaf2.cell_index(), kdb.Trans(MAX - 1000, 0)))  # one dbu short of the wrap: not this check's
+    ly2.write(str(tmp_path / "near.oas"), options)
+    with pytest.raises(ValueError, match=r"shapes reach 2147483647 dbu in x, KLayout's largest coordinate"):
+        extract_windows(str(tmp_path / "near.oas"), "1/0", 20 * UM)
+
+
+def test_top_a_ghost_cell_says_it_is_not_defined(tmp_path):
+    """--top a cell the file places but does not define: the message says so (it said the layer was drawn under other top cells)."""
+    ly, top, leaf = _leaf_in_top()
+    ghost = ly.create_cell("GHOST")
+    top.insert(kdb.CellInstArray(ghost.cell_index(), kdb.Trans(50000, 50000)))
+    ghost.ghost_cell = True
+    path = _write(ly, tmp_path / "ghost.gds")
+    with pytest.raises(ValueError, match=r"^--top 'GHOST': ghost.gds places this cell but does not define it \(a ghost cell, without shapes\); "
+                                         r"its top-level cells are \['LEAF', 'TOP'\]"):
+        extract_windows(path, "1/0", 5 * UM, top="GHOST")
+    assert extract_windows(path, "1/0", 5 * UM, top="TOP").density.min() == 1.0

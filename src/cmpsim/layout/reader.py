@@ -22,9 +22,10 @@ from pathlib import Path
 
 import klayout.db as kdb
 
+from .blocks import COORD_LIMIT
 from .twisted import untwist
 
-__all__ = ["Layout", "read_layout", "top_cell", "layers_in", "layer_listing", "LayoutTooLarge"]
+__all__ = ["Layout", "read_layout", "top_cell", "check_extent", "layers_in", "layer_listing", "LayoutTooLarge"]
 
 _GDS_MAGIC = b"\x00\x06\x00\x02"
 _OAS_MAGIC = b"%SEMI-OASIS\r\n"
@@ -136,13 +137,65 @@ def top_cell(layout: Layout, top: str | None = None) -> kdb.Cell:
         if cell is None:
             raise ValueError(f"--top {top!r}: no such cell in {layout.name}; its top-level cells are {_names(tops)} "
                              f"({db.cells()} cells in all)")
-        return cell
-    if not tops:
+        if cell.is_ghost_cell():
+            raise ValueError(f"--top {top!r}: {layout.name} places this cell but does not define it (a ghost cell, without "
+                             f"shapes); its top-level cells are {_names(tops)}")
+    elif not tops:
         raise ValueError(f"layout {layout.name} has no cells")
-    if len(tops) > 1:
+    elif len(tops) > 1:
         raise ValueError(f"layout {layout.name} has {len(tops)} top-level cells {_names(tops)}: "
                          "choose the die with --top NAME (top=NAME in Python)")
-    return db.cell(tops[0])
+    else:
+        cell = db.cell(tops[0])
+    check_extent(layout, cell)
+    return cell
+
+
+def check_extent(layout: Layout, cell: kdb.Cell) -> None:
+    """A ValueError if a placement under ``cell`` puts shapes past KLayout's 32-bit coordinates.
+
+    GDSII and OASIS allow it (a placement at 1.5e9 dbu of a cell 1.5e9 dbu wide), but KLayout keeps
+    every cell's box and every merged shape in 32-bit integers (dbu): a magnified placement there
+    comes out at -2**31 and a translated one wraps round, so the die's box, and the shapes, would
+    be silently wrong (or KLayout's merge fails an internal check). Cells are visited children
+    first, so a child's box from KLayout is right when its placements are looked at. A placement
+    whose box from KLayout lies within +-2**30 dbu, of a child within +-2**29 dbu, cannot have
+    wrapped (a wrapped coordinate lands beyond 2**30, a saturated one on -2**31); any other one,
+    and every array, is placed again in floating point and the first past [-2**31, 2**31 - 1] is
+    named. One pass over the placements (arrays once): 0.2 s for 179,000.
+    """
+    db = layout.db
+    under = set(cell.called_cells())
+    under.add(cell.cell_index())
+    safe = kdb.Box(-2**30, -2**30, 2**30, 2**30)
+    boxes: dict[int, tuple[kdb.DBox, bool]] = {}
+    for ci in db.each_cell_bottom_up():
+        if ci not in under:
+            continue
+        for inst in db.cell(ci).each_inst():
+            child = inst.cell_index
+            got = boxes.get(child)
+            if got is None:
+                b = db.cell(child).bbox()
+                got = boxes[child] = (kdb.DBox(b), b.empty() or b.inside(kdb.Box(-2**29, -2**29, 2**29, 2**29)))
+            box, small = got
+            if box.empty() or (small and not inst.is_regular_array() and inst.bbox().inside(safe)):
+                continue
+            placed = box.transformed(kdb.DCplxTrans(inst.cplx_trans))
+            if inst.is_regular_array():
+                a = kdb.DVector(inst.a) * (max(inst.na, 1) - 1)
+                b = kdb.DVector(inst.b) * (max(inst.nb, 1) - 1)
+                placed = placed + placed.moved(a) + placed.moved(b) + placed.moved(a + b)
+            if min(placed.left, placed.bottom) < -COORD_LIMIT or max(placed.right, placed.top) > COORD_LIMIT - 1:
+                reach = max(-placed.left, -placed.bottom, placed.right, placed.top)
+                d = inst.trans.disp
+                array = f", an array of {inst.na} x {inst.nb} stepped by ({inst.a}) and ({inst.b})" if inst.is_regular_array() else ""
+                raise ValueError(
+                    f"layout {layout.name}: the placement of cell {db.cell(child).name!r} in {db.cell(ci).name!r} at ({d.x}, {d.y}) dbu "
+                    f"(transformation {inst.cplx_trans}{array}) puts shapes {reach:,.0f} dbu from the origin ({reach * layout.dbu * 1e3:.6g} mm), past "
+                    f"KLayout's 32-bit coordinates (+-2**31 dbu = +-{COORD_LIMIT * layout.dbu * 1e3:.4g} mm at a database unit of "
+                    f"{layout.dbu:g} m), where its boxes and merges overflow; choose a cell below it with --top, or fix the "
+                    "placement (its offset, magnification or array pitch) in the layout")
 
 
 def layers_in(layout: Layout, cell: kdb.Cell | None = None) -> set[tuple[int, int]]:
