@@ -245,14 +245,16 @@ def test_a_wafer_of_layout_dies_reports_hotspots_per_die(tmp_path):
 
 # ---------------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("case", ["not_a_layout", "missing_layer", "empty_layer", "window_too_large", "unknown_process", "no_layer",
-                                  "stack_layer_map_missing", "stack_level_layer_missing", "placement_past_2_31"])
+                                  "stack_layer_map_missing", "stack_level_layer_missing", "placement_past_2_31", "missing_file", "directory"])
 def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, tmp_path, case):
     args = ["die", str(chip), "--layer", "1/0", "--blanket-rate", "100nm/min"]
     expect = {"not_a_layout": "not a layout", "missing_layer": "'7/0'", "empty_layer": "empty layer",
               "window_too_large": "larger than the die", "unknown_process": "unknown process 'tungsten'",
               "no_layer": "--layer", "stack_layer_map_missing": "layer_map", "stack_level_layer_missing": "level 'm2' of 2: --layer '7/0'",
 
-              "placement_past_2_31": "past KLayout's 32-bit coordinates"}[case]
+              "placement_past_2_31": "past KLayout's 32-bit coordinates",
+              # a missing file whose name is not a layout's was called "a CSV grid or a built-in die"; a directory "does not exist"
+              "missing_file": "chip.gds.zip' does not exist", "directory": "is a directory"}[case]
     if case == "not_a_layout":
         bad = tmp_path / "text.gds"
         bad.write_text("hello, not GDSII\n")
@@ -284,6 +286,10 @@ def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, 
         args[1] = str(tmp_path / "far.gds")
         lib.write_gds(args[1])
         args += ["--window", "1mm"]
+    elif case == "missing_file":
+        args[1] = str(tmp_path / "chip.gds.zip")
+    elif case == "directory":
+        args[1] = str(tmp_path)
     elif case == "no_layer":
         args = args[:2] + args[4:]
     elif case.startswith("stack_"):  # a stack's layer map that is not there (was a traceback), a level's layer the chip lacks

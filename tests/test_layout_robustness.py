@@ -208,3 +208,42 @@ def test_top_a_ghost_cell_says_it_is_not_defined(tmp_path):
                                          r"its top-level cells are \['LEAF', 'TOP'\]"):
         extract_windows(path, "1/0", 5 * UM, top="GHOST")
     assert extract_windows(path, "1/0", 5 * UM, top="TOP").density.min() == 1.0
+
+
+def test_a_gzipped_oasis_is_read_and_a_directory_named(tmp_path):
+    """KLayout reads gzipped OASIS (.oas.gz): so does the extraction (it was refused as "not gzipped GDSII"), the same windows
+    as the plain file; a directory given as the layout is called one (it was said not to exist)."""
+    import gzip
+
+    ly, top, leaf = _leaf_in_top()
+    top.insert(kdb.CellInstArray(leaf.cell_index(), kdb.ICplxTrans(1.5, 30, True, 150000, 0), kdb.Vector(3000, 0), kdb.Vector(0, 3000), 9, 7))
+    options = kdb.SaveLayoutOptions()
+    options.format = "OASIS"
+    plain = str(tmp_path / "chip.oas")
+    ly.write(plain, options)
+    zipped = tmp_path / "chip.oas.gz"
+    zipped.write_bytes(gzip.compress((tmp_path / "chip.oas").read_bytes()))
+    assert read_layout(zipped).format == "oas.gz"
+    a, b = extract_windows(plain, "1/0", 5 * UM), extract_windows(zipped, "1/0", 5 * UM)
+    np.testing.assert_array_equal(a.density, b.density)
+    ref, _ = klayout_flat(zipped, [(1, 0)], b)
+    np.testing.assert_allclose(b.density, ref, atol=1e-12)
+    (tmp_path / "dir.gds").mkdir()
+    with pytest.raises(ValueError, match=r"layout path .*dir.gds' is a directory: give the layout file in it"):
+        read_layout(tmp_path / "dir.gds")
+
+
+def test_a_layout_that_cannot_be_opened_is_named(tmp_path, monkeypatch):
+    """A file without read permission (the suite may run as root, where chmod does not stop a read: the open is made to fail as it
+    would): exit-2 material naming the path, not a PermissionError's traceback."""
+    from cmpsim.layout import reader
+
+    path = tmp_path / "locked.gds"
+    path.write_bytes(b"\x00\x06\x00\x02\x02\x58")
+
+    def denied(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(reader, "open", denied, raising=False)
+    with pytest.raises(ValueError, match=r"layout path .*locked.gds' cannot be opened \(Permission denied\): check that it is a readable file"):
+        read_layout(path)

@@ -76,7 +76,11 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
             given = [name for name, v in (("--layer", layers), ("--window", window_text), ("--top", top), ("--pdk", pdk),
                                           ("--layer-map", layer_map), ("--stack", stack_path), ("--fill", fill)) if v]
             if given:
-                raise ValueError(f"{', '.join(given)} apply to a layout file (.gds, .gds.gz, .oas); {layout!r} is a CSV grid or a built-in die")
+                what = (f"{layout!r} is a built-in die" if layout in BUILTIN_LAYOUTS else
+                        f"{layout!r} is not a layout (a CSV grid or another file)" if Path(layout).is_file() else
+                        f"{layout!r} is a directory" if Path(layout).is_dir() else f"{layout!r} does not exist")
+                raise ValueError(f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to a layout file (.gds, .gds.gz, .oas, "
+                                 f"recognised by its name or its first bytes); {what}")
         elif cell_text:
             raise ValueError("--cell-size applies to the built-in dies; a layout's cells are its windows (--window)")
         spec = parse_spec(list(specs))

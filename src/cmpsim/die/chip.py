@@ -32,7 +32,7 @@ from .stacks import film_stack
 __all__ = ["DieModel", "layout_die", "is_layout_file", "StackLevel", "StackResult", "read_stack", "simulate_stack"]
 
 _MAGIC = (b"\x00\x06\x00\x02", b"%SEMI-OASIS\r\n", b"\x1f\x8b")
-LAYOUT_SUFFIXES = (".gds", ".gds.gz", ".oas", ".gdsii", ".gds2")
+LAYOUT_SUFFIXES = (".gds", ".gds.gz", ".oas", ".oas.gz", ".gdsii", ".gds2")
 
 
 def is_layout_file(path) -> bool:

@@ -1,6 +1,6 @@
-"""Open a layout as KLayout does: GDSII, gzipped GDSII, OASIS (``klayout.db``).
+"""Open a layout as KLayout does: GDSII and OASIS, plain or gzipped (``klayout.db``).
 
-KLayout's reader is the field's own: it reads GDSII (plain or gzipped), OASIS with CBLOCKs
+KLayout's reader is the field's own: it reads GDSII and OASIS (plain or gzipped), OASIS with CBLOCKs
 and strict mode, arrays, every placement transformation (mirrored, rotated, magnified,
 non-Manhattan), paths (turned into polygons where shapes are wanted), texts and properties
 (never shapes), and the ``$$$CONTEXT_INFO$$$`` cell that KLayout and gdsfactory write for
@@ -30,7 +30,7 @@ __all__ = ["Layout", "read_layout", "top_cell", "check_extent", "layers_in", "la
 _GDS_MAGIC = b"\x00\x06\x00\x02"
 _OAS_MAGIC = b"%SEMI-OASIS\r\n"
 _GZ_MAGIC = b"\x1f\x8b"
-_WHAT = "expected GDSII (.gds), gzipped GDSII (.gds.gz) or OASIS (.oas)"
+_WHAT = "expected GDSII (.gds), gzipped GDSII (.gds.gz) or OASIS (.oas, .oas.gz)"
 
 
 class LayoutTooLarge(ValueError):
@@ -43,7 +43,7 @@ class Layout:
     """A layout read by KLayout: the database (coordinates in dbu), the file and its format.
 
     ``db`` is the :class:`klayout.db.Layout`; ``dbu`` the database unit in metres (1e-9 for a
-    1 nm grid); ``format`` is ``"gds"``, ``"gds.gz"`` or ``"oas"``.
+    1 nm grid); ``format`` is ``"gds"``, ``"gds.gz"``, ``"oas"`` or ``"oas.gz"``.
     """
 
     db: kdb.Layout
@@ -67,17 +67,22 @@ def _sniff(head: bytes) -> str | None:
 
 
 def read_layout(path: str | os.PathLike) -> Layout:
-    """Read a GDSII, gzipped GDSII or OASIS file with KLayout.
+    """Read a GDSII or OASIS file, plain or gzipped, with KLayout.
 
     Raises FileNotFoundError if ``path`` does not exist, ValueError if it is not a
     GDSII/OASIS layout or cannot be read (the message names the file and the accepted
     formats), and :class:`LayoutTooLarge` if the machine runs out of memory reading it.
     """
     p = Path(path)
+    if p.is_dir():
+        raise ValueError(f"layout path {str(p)!r} is a directory: give the layout file in it ({_WHAT})")
     if not p.is_file():
-        raise FileNotFoundError(f"layout path {str(p)!r} does not exist (expected a .gds, .gds.gz or .oas file)")
-    with open(p, "rb") as fh:
-        kind = _sniff(fh.read(16))
+        raise FileNotFoundError(f"layout path {str(p)!r} does not exist (expected a .gds, .gds.gz, .oas or .oas.gz file)")
+    try:
+        with open(p, "rb") as fh:
+            kind = _sniff(fh.read(16))
+    except OSError as exc:  # no permission to read it, a device, ...
+        raise ValueError(f"layout path {str(p)!r} cannot be opened ({exc.strerror or exc}): check that it is a readable file") from None
     if kind is None:
         raise ValueError(f"layout path {str(p)!r} is not a layout file: {_WHAT}")
     fmt = kind
@@ -87,9 +92,9 @@ def read_layout(path: str | os.PathLike) -> Layout:
                 inner = _sniff(fh.read(16))
         except OSError as exc:
             raise ValueError(f"layout path {str(p)!r} is a broken gzip stream ({exc}): {_WHAT}") from None
-        if inner != "gds":
-            raise ValueError(f"layout path {str(p)!r} is gzip but not gzipped GDSII: {_WHAT}")
-        fmt = "gds.gz"
+        if inner is None:
+            raise ValueError(f"layout path {str(p)!r} is gzip but neither gzipped GDSII nor gzipped OASIS: {_WHAT}")
+        fmt = f"{inner}.gz"
     db = kdb.Layout()
     options = kdb.LoadLayoutOptions()
     options.text_enabled = False  # texts are never shapes
