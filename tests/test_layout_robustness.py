@@ -247,3 +247,41 @@ def test_a_layout_that_cannot_be_opened_is_named(tmp_path, monkeypatch):
     monkeypatch.setattr(reader, "open", denied, raising=False)
     with pytest.raises(ValueError, match=r"layout path .*locked.gds' cannot be opened \(Permission denied\): check that it is a readable file"):
         read_layout(path)
+
+
+def test_a_large_array_of_a_small_cell_is_cut_into_tiles(tmp_path):
+    """A fill array of small squares was merged flat, every square held by KLayout: 1000 x 1000 took 22 s and 0.9 GB,
+    a 20 mm chip's 10,000 x 10,000 would have needed about 80 GB. Such arrays are now cut into tiles (cells of k x k
+    elements, placed many times like any big cell): KLayout's flat merge gives the same windows, the layout is given
+    back unchanged, and the 10^8 squares take well under a second."""
+    ly = kdb.Layout()
+    ly.dbu = 0.001
+    l1 = ly.layer(1, 0)
+    top, sq, tri = ly.create_cell("TOP"), ly.create_cell("SQUARE"), ly.create_cell("TRIANGLE")
+    sq.shapes(l1).insert(kdb.Box(0, 0, 1000, 1000))
+    tri.shapes(l1).insert(_polygon([(0, 0), (1500, 0), (0, 1500)]))
+    # rotated and mirrored, tiles left over at the far edges, negative pitch, squares that abut (pitch = size), a top-level shape across
+    top.insert(kdb.CellInstArray(sq.cell_index(), kdb.Trans(1, True, 3000, 7000), kdb.Vector(2000, 0), kdb.Vector(0, -1900), 133, 71))
+    top.insert(kdb.CellInstArray(sq.cell_index(), kdb.Trans(300000, 0), kdb.Vector(1000, 0), kdb.Vector(0, 2500), 90, 61))
+    top.insert(kdb.CellInstArray(tri.cell_index(), kdb.Trans(3, False, 0, 10000), kdb.Vector(-2000, 0), kdb.Vector(0, 2000), 64, 80))
+    top.shapes(l1).insert(kdb.Box(-150000, 0, 400000, 3000))
+    path = _write(ly, tmp_path / "fill.gds")
+    layout = read_layout(path)
+    cells = sorted(c.name for c in layout.db.each_cell())
+    for window in (5 * UM, 20 * UM):
+        stats = {}
+        res = extract_windows(layout, "1/0", window, stats=stats)
+        ref, _ = klayout_flat(path, [(1, 0)], res)
+        np.testing.assert_allclose(res.density, ref, atol=1e-12)
+        assert not stats["flat"] and stats["placements"] < 2000  # tiles, not 20,000 squares
+        flat = extract_windows(layout, "1/0", window, big=10**9)
+        np.testing.assert_allclose(res.boundary, flat.boundary, rtol=1e-9, atol=1e-15)
+    assert sorted(c.name for c in layout.db.each_cell()) == cells
+
+    chip = kdb.Layout()
+    chip.dbu = 0.001
+    top, sq = chip.create_cell("CHIP"), chip.create_cell("FILL")
+    sq.shapes(chip.layer(1, 0)).insert(kdb.Box(0, 0, 1000, 1000))
+    top.insert(kdb.CellInstArray(sq.cell_index(), kdb.Trans(), kdb.Vector(2000, 0), kdb.Vector(0, 2000), 10_000, 10_000))
+    res = extract_windows(_write(chip, tmp_path / "chip.gds"), "1/0", 100 * UM)
+    assert res.density.shape == (200, 200) and np.all(res.density == 0.25)  # 50 x 50 squares of 1 um^2 in (100 um)^2
