@@ -285,3 +285,22 @@ def test_a_large_array_of_a_small_cell_is_cut_into_tiles(tmp_path):
     top.insert(kdb.CellInstArray(sq.cell_index(), kdb.Trans(), kdb.Vector(2000, 0), kdb.Vector(0, 2000), 10_000, 10_000))
     res = extract_windows(_write(chip, tmp_path / "chip.gds"), "1/0", 100 * UM)
     assert res.density.shape == (200, 200) and np.all(res.density == 0.25)  # 50 x 50 squares of 1 um^2 in (100 um)^2
+
+
+def test_a_grid_larger_than_the_machines_memory_is_refused(tmp_path, monkeypatch):
+    """`cmpsim die` holds about 700 bytes a window (11.1 GB for 15.8 million): the 25 million windows allowed needed about
+    17.5 GB, so a smaller machine was killed or swapped instead of refusing. The limit now follows the machine's memory
+    (here made 1 GiB: 1.34 million windows), naming --window and the least window that fits."""
+    import cmpsim.layout.extract as ex
+
+    ly = kdb.Layout()
+    ly.dbu = 0.001
+    ly.create_cell("TOP").shapes(ly.layer(1, 0)).insert(kdb.Box(0, 0, 12_000_000, 12_000_000))
+    path = _write(ly, tmp_path / "chip.gds")
+    monkeypatch.setattr(ex, "_physical_memory", lambda: 2**30)
+    with pytest.raises(ex.LayoutTooLarge, match=r"into 1200 x 1200 = 1,440,000 windows, more than the 1,342,177 this machine's memory "
+                                                r"\(its 1.0 GiB at about 800 bytes a window\) is sized for: choose a larger --window \(at least 10.4 um\)"):
+        extract_windows(path, "1/0", 10 * UM)
+    assert extract_windows(path, "1/0", 10.4 * UM).density.shape == (1154, 1154)  # 1,331,716 windows: fits
+    monkeypatch.setattr(ex, "_physical_memory", lambda: None)  # a system that does not tell: the fixed limit
+    assert ex.MAX_WINDOWS == 25_000_000 and extract_windows(path, "1/0", 10 * UM).density.shape == (1200, 1200)
