@@ -304,3 +304,21 @@ def test_a_grid_larger_than_the_machines_memory_is_refused(tmp_path, monkeypatch
     assert extract_windows(path, "1/0", 10.4 * UM).density.shape == (1154, 1154)  # 1,331,716 windows: fits
     monkeypatch.setattr(ex, "_physical_memory", lambda: None)  # a system that does not tell: the fixed limit
     assert ex.MAX_WINDOWS == 25_000_000 and extract_windows(path, "1/0", 10 * UM).density.shape == (1200, 1200)
+
+
+@pytest.mark.parametrize("unit_um, unit_m", [(1e-5, 1e-11), (5e-5, 5e-11), (1e-6, 1e-12)])
+def test_a_database_unit_below_a_tenth_of_a_nanometre(tmp_path, unit_um, unit_m):
+    """A database unit of 0.01 nm, 0.05 nm or 1 pm (KLayout's 1e-05 um prints in exponent form): the unit in metres was read
+    by pasting "e-6" to it, "1e-05e-6", and every such file was refused as "could not convert string to float"."""
+    ly = kdb.Layout()
+    ly.dbu = unit_um
+    um = round(1 / unit_um)  # dbu per micrometre
+    top, leaf = ly.create_cell("TOP"), ly.create_cell("LEAF")
+    leaf.shapes(ly.layer(1, 0)).insert(kdb.Box(0, 0, 3 * um, 2 * um))
+    top.insert(kdb.CellInstArray(leaf.cell_index(), kdb.Trans(), kdb.Vector(5 * um, 0), kdb.Vector(0, 5 * um), 40, 30))
+    path = _write(ly, tmp_path / "fine.gds")
+    assert read_layout(path).dbu == unit_m  # exactly the decimal unit
+    res = extract_windows(path, "1/0", 20 * UM)
+    ref, _ = klayout_flat(path, [(1, 0)], res)
+    np.testing.assert_allclose(res.density, ref, atol=1e-12)
+    assert res.density[0, 0] == pytest.approx(16 * 6 / 400, rel=1e-12)

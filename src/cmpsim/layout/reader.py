@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import gzip
 import os
+from decimal import Decimal
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -114,8 +115,9 @@ def read_layout(path: str | os.PathLike) -> Layout:
                              f"other cells), which no layout tool can flatten; KLayout: {msg.strip()}") from None
         raise ValueError(f"layout path {str(p)!r} could not be read as a layout ({msg.strip()}): {_WHAT}") from None
     untwist(db)  # bow-ties: KLayout's deep merge would lose them, its flat merge keeps them
-    # KLayout keeps the unit in micrometres (0.001): read as a decimal, 1e-9 m stays exactly 1e-9
-    return Layout(db=db, path=p, format=fmt, dbu=float(f"{db.dbu!r}e-6"))
+    # KLayout keeps the unit in micrometres (0.001): shifted as a decimal, 1e-9 m stays exactly 1e-9 (and a unit
+    # below 0.1 nm, whose repr is "1e-05", shifts as well: pasting "e-6" to it made "1e-05e-6", not a number)
+    return Layout(db=db, path=p, format=fmt, dbu=float(Decimal(repr(db.dbu)).scaleb(-6)))
 
 
 #: Cell names listed in a message at most (a library of unused cells has hundreds of top cells).
