@@ -208,6 +208,10 @@ def test_top_a_ghost_cell_says_it_is_not_defined(tmp_path):
                                          r"its top-level cells are \['LEAF', 'TOP'\]"):
         extract_windows(path, "1/0", 5 * UM, top="GHOST")
     assert extract_windows(path, "1/0", 5 * UM, top="TOP").density.min() == 1.0
+    one = kdb.Layout()
+    one.create_cell("TOP").shapes(one.layer(1, 0)).insert(kdb.Box(0, 0, 10000, 10000))
+    with pytest.raises(ValueError, match=r"--top 'NOPE': no such cell in one.gds; its top-level cells are \['TOP'\] \(1 cell in all\)$"):
+        extract_windows(_write(one, tmp_path / "one.gds"), "1/0", 5 * UM, top="NOPE")  # said "(1 cells in all)"
 
 
 def test_a_gzipped_oasis_is_read_and_a_directory_named(tmp_path):

@@ -124,6 +124,11 @@ def read_layout(path: str | os.PathLike) -> Layout:
 _LISTED = 10
 
 
+def _count(n: int, noun: str) -> str:
+    """``n`` and the noun, plural unless ``n`` is 1."""
+    return f"{n} {noun}{'' if n == 1 else 's'}"
+
+
 def _names(names: list[str]) -> str:
     """Up to :data:`_LISTED` names, then how many more."""
     shown = ", ".join(repr(n) for n in names[:_LISTED])
@@ -143,7 +148,7 @@ def top_cell(layout: Layout, top: str | None = None) -> kdb.Cell:
         cell = db.cell(str(top))
         if cell is None:
             raise ValueError(f"--top {top!r}: no such cell in {layout.name}; its top-level cells are {_names(tops)} "
-                             f"({db.cells()} cells in all)")
+                             f"({_count(sum(1 for _ in db.each_cell()), 'cell')} in all)")
         if cell.is_ghost_cell():
             raise ValueError(f"--top {top!r}: {layout.name} places this cell but does not define it (a ghost cell, without "
                              f"shapes); its top-level cells are {_names(tops)}")
