@@ -245,7 +245,8 @@ def test_a_wafer_of_layout_dies_reports_hotspots_per_die(tmp_path):
 
 # ---------------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("case", ["not_a_layout", "missing_layer", "empty_layer", "window_too_large", "unknown_process", "no_layer",
-                                  "stack_layer_map_missing", "stack_level_layer_missing", "placement_past_2_31", "missing_file", "directory"])
+                                  "stack_layer_map_missing", "stack_level_layer_missing", "placement_past_2_31", "missing_file", "directory",
+                                  "stack_window_too_large"])
 def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, tmp_path, case):
     args = ["die", str(chip), "--layer", "1/0", "--blanket-rate", "100nm/min"]
     expect = {"not_a_layout": "not a layout", "missing_layer": "'7/0'", "empty_layer": "empty layer",
@@ -254,7 +255,9 @@ def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, 
 
               "placement_past_2_31": "past KLayout's 32-bit coordinates",
               # a missing file whose name is not a layout's was called "a CSV grid or a built-in die"; a directory "does not exist"
-              "missing_file": "chip.gds.zip' does not exist", "directory": "is a directory"}[case]
+              "missing_file": "chip.gds.zip' does not exist", "directory": "is a directory",
+              # the window was the stack file's, the message spoke of --window alone
+              "stack_window_too_large": "choose a smaller window (from --stack s.toml: window = '5 mm')"}[case]
     if case == "not_a_layout":
         bad = tmp_path / "text.gds"
         bad.write_text("hello, not GDSII\n")
@@ -292,6 +295,10 @@ def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, 
         args[1] = str(tmp_path)
     elif case == "no_layer":
         args = args[:2] + args[4:]
+    elif case == "stack_window_too_large":
+        st = tmp_path / "s.toml"
+        st.write_text('window = "5 mm"\n[[level]]\nname = "m1"\nlayers = ["1/0"]\nprocess = "oxide"\n')
+        args = ["die", str(chip), "--stack", str(st), "--blanket-rate", "100nm/min"]
     elif case.startswith("stack_"):  # a stack's layer map that is not there (was a traceback), a level's layer the chip lacks
         st = tmp_path / "s.toml"
         second = "m2" if case == "stack_layer_map_missing" else "7/0"

@@ -7,9 +7,9 @@ from __future__ import annotations
 import klayout.db as kdb
 import numpy as np
 import pytest
+from klayout_reference import klayout_flat
 
 from cmpsim.layout import extract_levels, extract_windows, read_layout
-from klayout_reference import klayout_flat
 
 UM = 1e-6
 MAX = 2**31 - 1  # KLayout's largest coordinate (dbu)
@@ -199,7 +199,7 @@ def test_a_placement_past_klayouts_coordinates_is_named(tmp_path, case):
 
 def test_top_a_ghost_cell_says_it_is_not_defined(tmp_path):
     """--top a cell the file places but does not define: the message says so (it said the layer was drawn under other top cells)."""
-    ly, top, leaf = _leaf_in_top()
+    ly, top, _ = _leaf_in_top()
     ghost = ly.create_cell("GHOST")
     top.insert(kdb.CellInstArray(ghost.cell_index(), kdb.Trans(50000, 50000)))
     ghost.ghost_cell = True

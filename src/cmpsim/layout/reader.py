@@ -17,8 +17,8 @@ from __future__ import annotations
 
 import gzip
 import os
-from decimal import Decimal
 from dataclasses import dataclass
+from decimal import Decimal
 from pathlib import Path
 
 import klayout.db as kdb
