@@ -245,12 +245,19 @@ def test_a_wafer_of_layout_dies_reports_hotspots_per_die(tmp_path):
 
 # ---------------------------------------------------------------------------- bad input
 @pytest.mark.parametrize("case", ["not_a_layout", "missing_layer", "empty_layer", "window_too_large", "unknown_process", "no_layer",
-                                  "stack_layer_map_missing", "stack_level_layer_missing"])
+                                  "stack_layer_map_missing", "stack_level_layer_missing", "placement_past_2_31", "missing_file", "directory",
+                                  "stack_window_too_large"])
 def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, tmp_path, case):
     args = ["die", str(chip), "--layer", "1/0", "--blanket-rate", "100nm/min"]
     expect = {"not_a_layout": "not a layout", "missing_layer": "'7/0'", "empty_layer": "empty layer",
               "window_too_large": "larger than the die", "unknown_process": "unknown process 'tungsten'",
-              "no_layer": "--layer", "stack_layer_map_missing": "layer_map", "stack_level_layer_missing": "level 'm2' of 2: --layer '7/0'"}[case]
+              "no_layer": "--layer", "stack_layer_map_missing": "layer_map", "stack_level_layer_missing": "level 'm2' of 2: --layer '7/0'",
+
+              "placement_past_2_31": "past KLayout's 32-bit coordinates",
+              # a missing file whose name is not a layout's was called "a CSV grid or a built-in die"; a directory "does not exist"
+              "missing_file": "chip.gds.zip' does not exist", "directory": "is a directory",
+              # the window was the stack file's, the message spoke of --window alone
+              "stack_window_too_large": "choose a smaller window (from --stack s.toml: window = '5 mm')"}[case]
     if case == "not_a_layout":
         bad = tmp_path / "text.gds"
         bad.write_text("hello, not GDSII\n")
@@ -273,8 +280,25 @@ def test_bad_input_is_refused_naming_the_parameter_and_nothing_is_written(chip, 
         st = tmp_path / "s.toml"
         st.write_text('[[level]]\nname = "m1"\nlayers = ["1/0"]\nprocess = "tungsten"\n')
         args = ["die", str(chip), "--stack", str(st), "--blanket-rate", "100nm/min"]
+    elif case == "placement_past_2_31":  # a magnified placement there was a traceback of KLayout's merge (status 1)
+        lib = gdstk.Library(unit=1e-6, precision=1e-9)
+        leaf, top = gdstk.Cell("LEAF"), gdstk.Cell("TOP")
+        leaf.add(gdstk.rectangle((0, 0), (1000, 1000), layer=1))
+        top.add(gdstk.rectangle((0, 0), (100, 100), layer=1), gdstk.Reference(leaf, (0, 0), magnification=5000))
+        lib.add(leaf, top)
+        args[1] = str(tmp_path / "far.gds")
+        lib.write_gds(args[1])
+        args += ["--window", "1mm"]
+    elif case == "missing_file":
+        args[1] = str(tmp_path / "chip.gds.zip")
+    elif case == "directory":
+        args[1] = str(tmp_path)
     elif case == "no_layer":
         args = args[:2] + args[4:]
+    elif case == "stack_window_too_large":
+        st = tmp_path / "s.toml"
+        st.write_text('window = "5 mm"\n[[level]]\nname = "m1"\nlayers = ["1/0"]\nprocess = "oxide"\n')
+        args = ["die", str(chip), "--stack", str(st), "--blanket-rate", "100nm/min"]
     elif case.startswith("stack_"):  # a stack's layer map that is not there (was a traceback), a level's layer the chip lacks
         st = tmp_path / "s.toml"
         second = "m2" if case == "stack_layer_map_missing" else "7/0"

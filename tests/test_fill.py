@@ -453,7 +453,7 @@ def test_cli_fill_bad_input_exits_2_naming_the_option_and_writes_nothing(tmp_pat
         ([path, "--layer", "68/20", "--fill-size", "2um"], "needs --fill"),
         ([path, "--stack", stack, "--fill", *FILL_RULE_ARGS], "--fill with --stack"),
         ([path, "--layer", "68/20", "--wafer", "--fill", *FILL_RULE_ARGS], "--fill with --wafer"),
-        (["uniform", "--fill", *FILL_RULE_ARGS], "--fill apply to a layout file"),
+        (["uniform", "--fill", *FILL_RULE_ARGS], "--fill applies to a layout file"),
         ([path, "--layer", "68/20", "--pdk", "sky130", "--layer", "69/20", "--fill"], "--fill-layer"),
     ]
     for args, text in cases:

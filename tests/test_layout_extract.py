@@ -293,7 +293,7 @@ def test_not_a_layout(tmp_path):
     gzbad = tmp_path / "notes.gds.gz"
     with gzip.open(gzbad, "wb") as fh:
         fh.write(b"plain text, gzipped")
-    with pytest.raises(ValueError, match="not gzipped GDSII"):
+    with pytest.raises(ValueError, match="neither gzipped GDSII nor gzipped OASIS"):
         extract_windows(gzbad, "68/20", 10 * UM)
     trunc = tmp_path / "trunc.gds"
     trunc.write_bytes(b"\x00\x06\x00\x02\x02\x58" + b"\x00" * 5)

@@ -52,7 +52,14 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     inputs (--config/--preset/--set/--grid).
     """
     from ..die import BUILTIN_LAYOUTS, simulate, simulate_wafer
-    from ..die.chip import is_layout_file, layout_die, read_stack, simulate_stack
+    from ..die.chip import (
+        is_layout_file,
+        layout_die,
+        read_stack,
+        simulate_stack,
+        stack_settings,
+        stack_settings_named,
+    )
     from ..die.hotspots import parse_spec
     from ..die.report import to_json, write_die_outputs
     from ..inputs.units import to_si
@@ -76,7 +83,11 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
             given = [name for name, v in (("--layer", layers), ("--window", window_text), ("--top", top), ("--pdk", pdk),
                                           ("--layer-map", layer_map), ("--stack", stack_path), ("--fill", fill)) if v]
             if given:
-                raise ValueError(f"{', '.join(given)} apply to a layout file (.gds, .gds.gz, .oas); {layout!r} is a CSV grid or a built-in die")
+                what = (f"{layout!r} is a built-in die" if layout in BUILTIN_LAYOUTS else
+                        f"{layout!r} is not a layout (a CSV grid or another file)" if Path(layout).is_file() else
+                        f"{layout!r} is a directory" if Path(layout).is_dir() else f"{layout!r} does not exist")
+                raise ValueError(f"{', '.join(given)} {'applies' if len(given) == 1 else 'apply'} to a layout file (.gds, .gds.gz, .oas, "
+                                 f"recognised by its name or its first bytes); {what}")
         elif cell_text:
             raise ValueError("--cell-size applies to the built-in dies; a layout's cells are its windows (--window)")
         spec = parse_spec(list(specs))
@@ -99,10 +110,11 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
             if params or process != "oxide":
                 raise ValueError("with --stack each level sets its process and inputs in the stack file (--process, --param do not apply)")
             levels, options = read_stack(stack_path)
+            from_file = stack_settings(options, window, top)
             if window is None and "window" in options:
                 window = to_si(options["window"], "m", f"window in {stack_path}", "20 um")
             rate = to_si(rate_text, "m/s", "--blanket-rate", "200 nm/min") if rate_text else None
-            with extraction_bar() as told:
+            with extraction_bar() as told, stack_settings_named(Path(stack_path).name, from_file):
                 result = stack = simulate_stack(layout, levels, window, top=top or options.get("top"), pdk=pdk or options.get("pdk"),
                                                 layer_map=layer_map or options.get("layer_map"), config=cfg, blanket_rate=rate, time=t,
                                                 spec=parse_spec(options.get("spec")) | spec, planarization_length=pl, weighting=weighting,

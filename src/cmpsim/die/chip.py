@@ -19,6 +19,7 @@ rate the wafer solve's.
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 from dataclasses import dataclass, field
@@ -32,7 +33,7 @@ from .stacks import film_stack
 __all__ = ["DieModel", "layout_die", "is_layout_file", "StackLevel", "StackResult", "read_stack", "simulate_stack"]
 
 _MAGIC = (b"\x00\x06\x00\x02", b"%SEMI-OASIS\r\n", b"\x1f\x8b")
-LAYOUT_SUFFIXES = (".gds", ".gds.gz", ".oas", ".gdsii", ".gds2")
+LAYOUT_SUFFIXES = (".gds", ".gds.gz", ".oas", ".oas.gz", ".gdsii", ".gds2")
 
 
 def is_layout_file(path) -> bool:
@@ -328,6 +329,30 @@ def _calibrated_level(level: StackLevel, calibration, planarization_length, weig
     return (level.process.replace(**consts) if consts else level.process), length, unc
 
 
+def stack_settings(options: dict, window, top) -> list[tuple[str, str]]:
+    """(option, setting) pairs of a stack file's ``options`` (:func:`read_stack`) that stand for
+    ``--window`` or ``--top`` in this run (those not given on the command line)."""
+    out = []
+    if window is None and "window" in options:
+        out.append(("--window", f"window = {options['window']!r}"))
+    if not top and options.get("top"):
+        out.append(("--top", f"top = {options['top']!r}"))
+    return out
+
+
+@contextlib.contextmanager
+def stack_settings_named(stack_name, settings):
+    """Re-raise a ValueError (or LayoutTooLarge) whose message speaks of ``--window`` or ``--top``
+    naming the stack file's setting when the value came from there (:func:`stack_settings`)."""
+    try:
+        yield
+    except ValueError as exc:
+        said = [text for option, text in settings or () if option in str(exc)]
+        if not said:
+            raise
+        raise type(exc)(f"{exc} (from --stack {stack_name}: {', '.join(said)})") from None
+
+
 def simulate_stack(layout, levels, window: float | None = None, *, top: str | None = None, pdk: str | None = None, layer_map=None,
                    config=None, blanket_rate: float | None = None, time: float | None = None, spec=None,
                    planarization_length: float | None = None, weighting: str = "gaussian", feature_contact: str = "elastic",
@@ -350,8 +375,11 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
     from .hotspots import parse_spec
 
     spec = parse_spec(spec)
+    from_file = stack_name = None
     if isinstance(levels, (str, os.PathLike)):
+        stack_name = Path(levels).name
         levels, options = read_stack(levels)
+        from_file = stack_settings(options, window, top)
         if window is None and "window" in options:
             window = to_si(options["window"], "m", "window", "20 um")
         pdk = pdk or options.get("pdk")
@@ -369,8 +397,9 @@ def simulate_stack(layout, levels, window: float | None = None, *, top: str | No
 
     specs = [list(lv.layers) if isinstance(lv.layers, tuple) else lv.layers for lv in levels]
     try:
-        extracted = extract_levels(layout, specs, window, top=top, pdk=pdk, layer_map=layer_map, progress=progress,
-                                   names=[lv.name for lv in levels])
+        with stack_settings_named(stack_name, from_file):
+            extracted = extract_levels(layout, specs, window, top=top, pdk=pdk, layer_map=layer_map, progress=progress,
+                                       names=[lv.name for lv in levels])
     except FileNotFoundError as exc:  # a layer map that is not there: bad input, as in layout_die
         raise ValueError(str(exc)) from None
     dies = [Layout.from_windows(w) for w in extracted]

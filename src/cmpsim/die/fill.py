@@ -318,7 +318,7 @@ def fill_die(layout, layers, window: float, rules, fill_layer, *, top: str | Non
     sites = fill_sites(layout, layers, windows, rules, top=top, pdk=pdk, layer_map=layer_map)
     model = DieModel(config, process, blanket_rate=blanket_rate, **model_options)
     plan = plan_fill(windows, sites, model=model, time=time)
-    name = "fill.oas" if layout.format == "oas" else "fill.gds"
+    name = "fill.oas" if layout.format.startswith("oas") else "fill.gds"
     pair = tuple(fill_layer)
     fill = plan.to_dict() | {"layer": f"{pair[0]}/{pair[1]}", "file": name if with_file else None,
                              "rules": {"size": rules.size, "spacing": rules.spacing, "keepout": rules.keepout, "edge": rules.edge,

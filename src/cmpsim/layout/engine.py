@@ -302,6 +302,15 @@ def window_rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: Windo
     big = BIG if big is None else big
     _check_reach(top, layer_indexes)
     the_plan: Plan = plan(layout, top, layer_indexes, grid.w, big)
+    try:
+        return _rasters(layout, top, layer_indexes, grid, the_plan, threads, progress, stats)
+    finally:
+        if the_plan.tiles:  # cells the plan added (a large array cut into tiles): the layout is given back as it came
+            layout.delete_cells(list(the_plan.tiles))
+
+
+def _rasters(layout: kdb.Layout, top: kdb.Cell, layer_indexes, grid: WindowGrid, the_plan: Plan, threads: int, progress, stats: dict):
+    """:func:`window_rasters` on a plan."""
     stats.update(blocks=len(the_plan.placements), placements=the_plan.count, flat=False, zone_windows=0)
     boxes = {}
     if the_plan.composed:

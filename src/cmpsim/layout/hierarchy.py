@@ -12,7 +12,11 @@ The plan walks the hierarchy from the die's top cell:
   fill cells, rotated or magnified placements) is that cell's **rest**: one block merged by
   KLayout with the composed children's subtrees left out;
 * a child is composed only if every placement of it in the cell is composable and no small
-  child of the cell calls it (its shapes would be lost from the rest otherwise).
+  child of the cell calls it (its shapes would be lost from the rest otherwise);
+* a small child placed in the cell only by large plain regular arrays (fill) is **tiled**: each
+  array is cut into tiles of k x k elements spanning at least :data:`BIG` windows
+  (:func:`array_tiles`, cells added to the layout and deleted by the caller), placed like
+  composed children, so that 10^8 fill squares are a few blocks and not 10^8 flat shapes.
 
 The result is a list of blocks, each with its placements in the die's frame: an integer
 orientation matrix and a translation (dbu).  Where two placed blocks' bounding boxes overlap
@@ -28,7 +32,7 @@ from dataclasses import dataclass
 import klayout.db as kdb
 import numpy as np
 
-__all__ = ["BlockKey", "Plan", "plan", "overlap_zones", "placed_boxes", "block_box", "BIG"]
+__all__ = ["BlockKey", "Plan", "plan", "overlap_zones", "placed_boxes", "block_box", "array_tiles", "BIG"]
 
 #: A child is composed when its shapes span at least this many windows in x and in y.
 BIG = 4
@@ -38,6 +42,8 @@ MAX_PLACEMENTS = 2_000_000
 MAX_PAIRS = 5_000_000
 #: A cell is composed only if the overlaps of its parts' boxes cover less than this fraction of it.
 FLAT_FRACTION = 0.3
+#: Elements of a regular array of a small cell from which it is cut into tiles (:func:`array_tiles`).
+TILE_MIN = 4096
 
 
 def block_box(layout: kdb.Layout, key: "BlockKey", layer_indexes) -> tuple[int, int, int, int] | None:
@@ -79,6 +85,8 @@ class Plan:
     """
 
     placements: dict[BlockKey, tuple[np.ndarray, np.ndarray]]
+    #: Tile cells the plan added to the layout (:func:`array_tiles`); the caller deletes them when done.
+    tiles: tuple[int, ...] = ()
 
     @property
     def count(self) -> int:
@@ -117,6 +125,54 @@ def _instance_translations(inst: kdb.Instance) -> np.ndarray:
     return base + off
 
 
+def _tile_counts(inst: kdb.Instance, span: int) -> tuple[int, int] | None:
+    """Elements per tile along the array's vectors (a, b) so that a tile spans at least ``span`` dbu
+    along each vector the array repeats on; None when the array is not worth tiling: complex, fewer
+    than :data:`TILE_MIN` elements, or fewer than two tiles (see :func:`array_tiles`)."""
+    if inst.is_complex() or not inst.is_regular_array() or inst.na * inst.nb < TILE_MIN:
+        return None
+    a, b = inst.a, inst.b
+    if inst.na > 1 and inst.nb > 1 and a.x * b.y - a.y * b.x == 0:  # parallel or zero vectors: the elements pile up
+        return None
+    counts = []
+    for n, v in ((inst.na, a), (inst.nb, b)):
+        step = max(abs(v.x), abs(v.y))
+        counts.append(n if n == 1 or step == 0 else min(n, max(1, -(-span // step))))
+    if (inst.na + counts[0] - 1) // counts[0] * ((inst.nb + counts[1] - 1) // counts[1]) < 2:
+        return None
+    return counts[0], counts[1]
+
+
+def array_tiles(layout: kdb.Layout, inst: kdb.Instance, counts: tuple[int, int], made: dict) -> list[tuple[int, np.ndarray]]:
+    """A large regular array of a small cell as tiles: cells of k1 x k2 elements (and the partial
+    ones at its far edges) added to the layout, each with its translations in the parent's frame.
+
+    A fill array of 10^8 squares merged flat holds every square; its tiles are a handful of blocks
+    merged once and placed many times, like any big cell (the windows are the same: the tiles
+    hold exactly the array's elements). ``made`` caches the tile cells by (cell, orientation,
+    vectors, counts) across arrays; the caller deletes them (:attr:`Plan.tiles`).
+    """
+    k1, k2 = counts
+    a, b = inst.a, inst.b
+    rot = kdb.Trans(inst.trans.rot, inst.trans.is_mirror(), 0, 0)
+    d = inst.trans.disp
+    out = []
+    for n1, s1 in ((k1, np.arange(0, inst.na - k1 + 1, k1)), (inst.na % k1, np.array([inst.na - inst.na % k1]))):
+        for n2, s2 in ((k2, np.arange(0, inst.nb - k2 + 1, k2)), (inst.nb % k2, np.array([inst.nb - inst.nb % k2]))):
+            if n1 == 0 or n2 == 0 or len(s1) == 0 or len(s2) == 0:
+                continue
+            key = (inst.cell_index, str(rot), a.x, a.y, b.x, b.y, n1, n2)
+            if key not in made:
+                tile = layout.create_cell(f"$cmpsim$tile${len(made)}")
+                tile.insert(kdb.CellInstArray(inst.cell_index, rot, a, b, n1, n2))
+                made[key] = tile.cell_index()
+            i, j = np.meshgrid(s1.astype(np.int64), s2.astype(np.int64), indexing="ij")
+            i, j = i.ravel(), j.ravel()
+            t = np.stack([d.x + i * a.x + j * b.x, d.y + i * a.y + j * b.y], axis=1)
+            out.append((made[key], t))
+    return out
+
+
 def plan(layout: kdb.Layout, top: kdb.Cell, layer_indexes, window: int, big: int = BIG) -> Plan:
     """The blocks of ``top`` on the layers and their placements (see the module).
 
@@ -124,20 +180,28 @@ def plan(layout: kdb.Layout, top: kdb.Cell, layer_indexes, window: int, big: int
     ``window`` (dbu) in x and in y; 0 composes every plain placement.
     """
     memo: dict[int, dict[BlockKey, tuple[np.ndarray, np.ndarray]]] = {}
+    made: dict = {}  # tile cells added to the layout (array_tiles)
     big = int(big) * int(window)
+    one = np.array([[1, 0, 0, 1]], dtype=np.int64)
 
     def is_big(ci: int) -> bool:
         box = _layer_box(layout.cell(ci), layer_indexes)
         return (not box.empty()) and box.width() >= big and box.height() >= big
 
-    def pays(cell: kdb.Cell, rest: BlockKey) -> bool:
-        """Whether composing the cell leaves most of it outside the overlaps of its parts:
-        the zones (recomputed flat) must cover less than :data:`FLAT_FRACTION` of its box."""
+    def pays(cell: kdb.Cell, rest: BlockKey, tiles=(), tiled=frozenset()) -> bool:
+        """Whether composing the cell leaves most of it outside the overlaps of its parts (its
+        composed children's placements, and its ``tiles`` (tile cell, translations) standing for the
+        arrays of the children ``tiled``): the zones (recomputed
+        flat) must cover less than :data:`FLAT_FRACTION` of its box."""
         boxes = []
+        for tc, t in tiles:
+            b = block_box(layout, BlockKey(tc), layer_indexes)
+            if b is not None:
+                boxes.append(placed_boxes(b, np.broadcast_to(one, (len(t), 4)), t))
         b = block_box(layout, rest, layer_indexes)
         if b is not None:
             boxes.append(np.array([b], dtype=np.int64))
-        excluded = set(rest.excluded)
+        excluded = set(rest.excluded) - set(tiled)
         for inst in cell.each_inst():
             if inst.cell_index in excluded:
                 cb = _layer_box(layout.cell(inst.cell_index), layer_indexes)
@@ -163,20 +227,38 @@ def plan(layout: kdb.Layout, top: kdb.Cell, layer_indexes, window: int, big: int
             fine = (not inst.is_complex()) and ok.get(c, True)
             ok[c] = fine and (c in ok or is_big(c))
         small = [c for c, v in ok.items() if not v]
-        called: set[int] = set()
-        for c in small:
-            called.update(layout.cell(c).called_cells())
+        arrays: dict[int, list | None] = {c: [] for c in small}  # a small child placed here only by large plain arrays is tiled
+        for inst in cell.each_inst():
+            c = inst.cell_index
+            if arrays.get(c) is not None:
+                counts = _tile_counts(inst, big)
+                arrays[c] = None if counts is None else arrays[c] + [(inst, counts)]
+        tiled = {c for c, v in arrays.items() if v}
+        while True:  # what stays in the rest must not call what is left out of it
+            called: set[int] = set()
+            for c in small:
+                if c not in tiled:
+                    called.update(layout.cell(c).called_cells())
+            if not tiled & called:
+                break
+            tiled -= called
         composed = [c for c, v in ok.items() if v and c not in called]
         out: dict[BlockKey, list] = {}
-        if not composed:
+        if not composed and not tiled:
             memo[ci] = flat
             return flat
-        rest = BlockKey(ci, tuple(sorted(composed)))
-        if not pays(cell, rest):
+        rest = BlockKey(ci, tuple(sorted(composed + list(tiled))))
+        tiles = [part for c in sorted(tiled) for inst, counts in arrays[c] for part in array_tiles(layout, inst, counts, made)]
+        if not pays(cell, rest, tiles, tiled):
             memo[ci] = flat
             return flat
-        out[rest] = [(np.array([[1, 0, 0, 1]], dtype=np.int64), np.zeros((1, 2), dtype=np.int64))]
-        total = 1
+        out[rest] = [(one, np.zeros((1, 2), dtype=np.int64))]
+        total = 1 + sum(len(t) for _, t in tiles)
+        if total > MAX_PLACEMENTS:
+            memo[ci] = flat
+            return flat
+        for tc, t in tiles:
+            out.setdefault(BlockKey(tc), []).append((np.broadcast_to(one, (len(t), 4)), t))
         for inst in cell.each_inst():
             c = inst.cell_index
             if c not in composed:
@@ -199,7 +281,11 @@ def plan(layout: kdb.Layout, top: kdb.Cell, layer_indexes, window: int, big: int
         memo[ci] = {k: (np.concatenate([p[0] for p in v]), np.concatenate([p[1] for p in v])) for k, v in out.items()}
         return memo[ci]
 
-    return Plan(visit(top.cell_index()))
+    try:
+        return Plan(visit(top.cell_index()), tuple(made.values()))
+    except BaseException:
+        layout.delete_cells(list(made.values()))
+        raise
 
 
 def placed_boxes(box: tuple[int, int, int, int], m: np.ndarray, t: np.ndarray) -> np.ndarray:

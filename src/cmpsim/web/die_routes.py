@@ -1,6 +1,6 @@
 """The die routes of ``cmpsim serve``: a layout uploaded, the die model run on it as ``cmpsim die LAYOUT`` runs it.
 
-``POST /api/die`` takes the layout file (.gds, .gds.gz or .oas; recognised from its first
+``POST /api/die`` takes the layout file (.gds, .gds.gz, .oas or .oas.gz; recognised from its first
 bytes) as the request body and the options of ``cmpsim die LAYOUT`` as query parameters. The
 upload is written to a temporary directory of its own, which is removed when the answer is
 sent; the run ends in the functions the command calls, :func:`cmpsim.die.chip.layout_die` and
@@ -34,7 +34,7 @@ __all__ = ["die_routes", "DIE_MAPS", "die_parameter"]
 #: the final surface, and the quantities with hotspot limits).
 DIE_MAPS = ["density", "thickness", "step_height", "dishing", "erosion"]
 
-_LAYOUT_FORMATS = "GDSII (.gds), gzipped GDSII (.gds.gz) or OASIS (.oas)"
+_LAYOUT_FORMATS = "GDSII (.gds), gzipped GDSII (.gds.gz) or OASIS (.oas, .oas.gz)"
 
 
 def die_parameter(message: str) -> str | None:
@@ -85,7 +85,7 @@ def die_routes(limits: Limits, slots: JobSlots) -> APIRouter:
         "/api/die",
         summary="The die model on an uploaded layout (GDSII/OASIS), as `cmpsim die LAYOUT --json`",
         description=(
-            "The body is the layout file itself (`Content-Type: application/octet-stream`; .gds, .gds.gz or .oas, "
+            "The body is the layout file itself (`Content-Type: application/octet-stream`; .gds, .gds.gz, .oas or .oas.gz, "
             "recognised from its first bytes), at most the server's upload limit (413 beyond it). The query holds the "
             "options of `cmpsim die LAYOUT`: `layer` (repeatable or comma-separated, `L/D` or a name with `pdk`), "
             "`window`, `process`, `spec` (repeatable `KIND=LIMIT`), `top`, `time`, `blanket_rate`, `weighting`, and "
