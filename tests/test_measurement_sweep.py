@@ -253,3 +253,24 @@ def test_an_unquoted_decimal_comma_is_named_in_the_field_count(tmp_path, header,
 def test_a_data_set_that_cannot_be_compared_names_the_row(tmp_path, rows, where):
     # named the file only
     _refused(tmp_path, "shape.csv", "quantity,value,unit,comparison\n" + rows, where)
+
+
+@pytest.mark.parametrize("text, why", [("\u22123 psi", "a minus sign is written '-'"), ("\u20133 psi", "a minus sign is written '-'"),
+                                       ("<5 psi", "a bound or an approximate value is not a value"),
+                                       ("~5 psi", "a bound or an approximate value is not a value"),
+                                       ("\u22485 psi", "a bound or an approximate value is not a value"), ("5 psi;", "write one number")])
+def test_a_character_the_unit_parser_drops_is_refused(text, why):
+    # pint's tokenizer dropped them without a word: a typographic minus read '-3 psi' as +3 psi, '<5 psi' as 5 psi
+    with pytest.raises(ValueError, match=rf"applied_pressure: .* holds the character .*would drop without a word.*{why}"):
+        units.to_si(text, "Pa", "applied_pressure")
+
+
+def test_the_marks_of_units_still_read():
+    assert units.to_si("1 nm\u00b7min\u207b\u00b9", "m/s") == pytest.approx(1e-9 / 60)
+    assert units.to_si("2 m\u00b2", "m^2") == 2.0 and units.to_si("5 \u00b5m", "m") == pytest.approx(5e-6)
+    assert units.to_si("(5) psi", "Pa") == pytest.approx(5 * 6894.757, rel=1e-6) and units.to_si("5\u00a0psi", "Pa") > 0
+
+
+def test_a_value_with_a_typographic_minus_says_so(tmp_path):
+    _refused(tmp_path, "minus.csv", "quantity,value,unit,x,y\nremoval_rate,150,nm/min,\u221250 mm,0 mm\n", r"minus.csv:2: row 1, column 'x': .*a minus sign is written '-'")
+    _refused(tmp_path, "v.csv", "quantity,value,unit\nremoval_rate,\u2212150,nm/min\n", r"v.csv:2: row 1, column 'value': .*typographic: write '-'")

@@ -209,11 +209,16 @@ PLACEHOLDERS = ("-", "--", "\u2013", "\u2014", "n/a", "na", "n.a.", "none", "nul
 
 
 def placeholder_hint(text: str) -> str:
-    """" (... leave the cell empty ...)" for a cell that stands for no value (``-``, ``n/a``); "" for any other text."""
+    """" (... leave the cell empty ...)" for a cell that stands for no value (``-``, ``n/a``), " (... written '-')" for
+    a number with a typographic minus (``\u22121.5``, which ``float`` refuses); "" for any other text."""
     if text.strip().lower() not in PLACEHOLDERS:
-        return ""
+        return " (its minus sign is typographic: write '-')" if text.strip()[:1] in "\u2212\u2013\u2014\u2012\ufe63\uff0d" and text.strip()[1:] else ""
     return (f" ({text.strip()!r} stands for no value: leave the cell empty where the column is optional and the value not known, "
             "or leave out the row)")
+
+
+#: Characters besides letters, digits and spaces that a quantity's text may hold (operators, a unit's marks).
+_QUANTITY_MARKS = ".+-*/^()%_\u00b0\u00b7\u00d7\u207b\u22c5,:\u00b1'"
 
 
 _CLOCK = re.compile(r"^\s*\d+(:\d+){1,2}(\.\d*)?\s*$")
@@ -228,7 +233,15 @@ def _refuse_misread(text: str, name: str) -> None:
     pint drops it and reads 35 psi, 1500 nm; a decimal comma or a thousands separator is not guessed), with a second
     number (``"93/87 rpm"``, a platen and a head speed, read as 1.07 rpm; ``"34 500 Pa"`` read as 34 x 500 Pa;
     ``"2 3 psi"``), a time written as a clock (``"1:30"``: minutes and seconds, or hours and minutes?), and a cell
-    that stands for no value (``"-"``)."""
+    that stands for no value (``"-"``), and a character pint's tokenizer drops without a word (a typographic minus or
+    dash: ``"\u22123 psi"`` read as 3 psi; a bound or an approximation: ``"<5 psi"``, ``"~5 psi"`` read as 5 psi)."""
+    dropped = next((c for c in text if not (c.isalnum() or c.isspace() or c in _QUANTITY_MARKS)), None)
+    if dropped is not None and text.strip().lower() not in PLACEHOLDERS:
+        why = ("a minus sign is written '-'" if dropped in "\u2212\u2013\u2014\u2012\ufe63\uff0d" else
+               "a bound or an approximate value is not a value: write the number itself" if dropped in "<>~\u2248\u2264\u2265\u2272\u2273" else
+               "write one number and its unit")
+        raise ValueError(f"{name}: {text!r} holds the character {dropped!r} (U+{ord(dropped):04X}), which the unit parser would drop "
+                         f"without a word ('\u22123 psi' would read as 3 psi, '<5 psi' as 5 psi); {why}")
     if "," in text or re.search(r"[0-9]_[0-9]", text):
         raise ValueError(f"{name}: {text!r} has a {'comma' if ',' in text else 'digit separator'}: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
