@@ -229,6 +229,8 @@ def _refuse_misread(text: str, name: str) -> None:
     number (``"93/87 rpm"``, a platen and a head speed, read as 1.07 rpm; ``"34 500 Pa"`` read as 34 x 500 Pa;
     ``"2 3 psi"``), a time written as a clock (``"1:30"``: minutes and seconds, or hours and minutes?), and a cell
     that stands for no value (``"-"``)."""
+    if not text.strip():  # `--set applied_pressure=` or `x = ""`: pint says "cannot be an empty string"
+        raise ValueError(f"{name} is empty; give a value with its unit")
     if "," in text or re.search(r"[0-9]_[0-9]", text):
         raise ValueError(f"{name}: {text!r} has a {'comma' if ',' in text else 'digit separator'}: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
