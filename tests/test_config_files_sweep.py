@@ -178,6 +178,7 @@ def test_a_stack_file_not_in_utf8_names_its_line(tmp_path):
         ["polish", "RECIPE", "--set", "grid=coarse"],
         ["lot", "RECIPE", "--wafers", "1", "--set", "grid=coarse"],
         ["sweep", "SWEEP"],
+        ["die", "uniform", "--grid", "coarse"],
     ],
 )
 def test_an_out_that_cannot_be_made_is_refused_before_the_solve(tmp_path, args):
