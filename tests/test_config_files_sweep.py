@@ -200,3 +200,11 @@ def test_an_empty_value_says_it_is_empty():
     assert r.exit_code == 2 and "applied_pressure is empty" in r.output, r.output
     with pytest.raises(RecipeError, match="thickness is empty"):
         parse_recipe(FILM.replace('"1 um"', '""') + STEP)
+
+
+def test_a_misspelt_section_is_named_as_a_section():
+    """[proces] was "unknown parameter 'proces'; known:" and ninety names."""
+    with pytest.raises(ValueError, match=r"\[proces\] is not a section; did you mean process\?"):
+        Config.from_mapping({"proces": {"applied_pressure": "3 psi"}})
+    with pytest.raises(SweepError, match=r"'proces' in \[base\]; did you mean process\?"):
+        SweepSpec.from_mapping({"base": {"proces": {"applied_pressure": "3 psi"}}, "axes": {"grid": ["coarse"]}})

@@ -476,6 +476,8 @@ class Config:
                     if k in flat:  # set at the top level too: one of the two would be dropped without a word
                         raise ValueError(f"parameter {k!r} is set twice, at the top level and in [{key}]; keep one")
                     flat[k] = v
+            elif isinstance(value, dict) and key not in PARAMETERS:  # a misspelt section: say so, not "unknown parameter"
+                raise ValueError(f"unknown parameter {key!r}: [{key}] is not a section{did_you_mean(key, _SECTIONS)}; the sections are {', '.join(f'[{s}]' for s in _SECTIONS)}")
             else:
                 if key in flat:
                     raise ValueError(f"parameter {key!r} is set twice, in [{PARAMETERS[key].section}] and at the top level; keep one")

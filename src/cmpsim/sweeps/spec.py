@@ -197,7 +197,8 @@ class SweepSpec:
                     if kk not in PARAMETERS:
                         raise SweepError(f"{where}: unknown setting {kk!r} in [base.{k}]{_unknown(kk)}")
             elif k not in PARAMETERS:
-                raise SweepError(f"{where}: unknown setting {k!r} in [base]{_unknown(k)}")
+                near = did_you_mean(k, _SECTIONS) if isinstance(v, Mapping) else ""
+                raise SweepError(f"{where}: unknown setting {k!r} in [base]{near or _unknown(k)}")
         try:
             base = Config.from_mapping(dict(base_data))
         except ValueError as exc:
