@@ -198,13 +198,23 @@ def die_constants(source) -> DieConstants | None:
         out[n] = float(v)
     unc = None
     if "uncertainty" in die:
+        raw = die["uncertainty"]
+        lacking = [k for k in ("names", "values", "covariance_log") if k not in raw] if isinstance(raw, dict) else None
+        if lacking is None or lacking:
+            raise ValueError(f"{where}: uncertainty must be a table with names, values and covariance_log"
+                             + (f"; {', '.join(lacking)} missing" if lacking else f"; got {raw!r}"))
         try:
-            unc = DieUncertainty.from_dict(die["uncertainty"])
+            unc = DieUncertainty.from_dict(raw)
         except (KeyError, TypeError, ValueError) as exc:
             raise ValueError(f"{where}: uncertainty: {exc}") from None
         missing = [n for n in unc.names if n not in out]
         if missing:
             raise ValueError(f"{where}: uncertainty names {', '.join(missing)}, which constants does not give")
+        differ = [n for n, v in zip(unc.names, unc.values) if not math.isclose(v, out[n], rel_tol=1e-9)]
+        if differ:  # the uncertainty's values are the ones the die model runs with: two values, one silently dropped
+            n = differ[0]
+            raise ValueError(f"{where}: uncertainty.values gives {n} = {unc.values[unc.names.index(n)]!r}, constants.{n} = {out[n]!r}; "
+                             "they must agree (edit both, or rerun cmpsim calibrate)")
     return DieConstants(process, out, unc, name)
 
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import _fail, _rich_table, command_errors, main, out_console
+from .group import _fail, _rich_table, check_out, command_errors, main, out_console
 from .inputs import config_options, load_config, parse_assignments
 from .progress import extraction_bar
 
@@ -77,6 +77,8 @@ def die_command(layout, list_dies, wafer, time_text, process, params, pl_text, w
     fill_given = [name for name, v in (("--fill-layer", fill_layer), ("--fill-size", fill_size), ("--fill-spacing", fill_spacing),
                                        ("--fill-keepout", fill_keepout), ("--fill-edge", fill_edge)) if v]
     with command_errors("no equilibrium of the wafer solve"):
+        if out_dir:
+            check_out(out_dir)  # before the extraction and the solve, not after them
         if fill_given and not fill:
             raise ValueError(f"{', '.join(fill_given)} {'needs' if len(fill_given) == 1 else 'need'} --fill")
         if not real:

@@ -40,6 +40,31 @@ def command_errors(no_equilibrium: str = "no equilibrium"):
               "region (--top a sub-cell), or use a machine with more memory")
 
 
+def check_out(path, option: str = "--out") -> None:
+    """ValueError (exit status 2) if ``path``, an output directory or file not yet written, cannot be made:
+    its nearest existing ancestor is a file, or a directory this user may not write in. Called before the
+    solve, so that a run is not computed in vain and nothing is left half-written."""
+    import os
+
+    anc = Path(path).absolute()
+    while not anc.exists():
+        anc = anc.parent
+    if not anc.is_dir():
+        raise ValueError(f"{option} {path}: cannot be created, {anc} is a file, not a directory")
+    if not os.access(anc, os.W_OK | os.X_OK):
+        raise ValueError(f"{option} {path}: cannot write in {anc} (permission denied); choose a directory you may write in")
+
+
+@contextlib.contextmanager
+def writing_errors(path):
+    """Exit with status 2 and ``cannot write to PATH: why`` where writing the outputs fails (a full disk, a
+    directory removed under the run), not with a traceback."""
+    try:
+        yield
+    except OSError as exc:
+        _fail(f"cannot write to {path}: {exc}")
+
+
 def _warn(message: str) -> None:
     """A warning of cmpsim as the command line prints every one: ``cmpsim: warning: <message>``, one line on stderr."""
     text = " ".join(str(message).split())

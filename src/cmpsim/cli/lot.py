@@ -5,7 +5,7 @@ from __future__ import annotations
 import click
 
 from ..polisher.control import CLOCKS, CONTROL, DRIFT_PRIORS, DRIFT_WEIGHT, WEIGHT
-from .group import _rich_table, command_errors, main, out_console
+from .group import _rich_table, check_out, command_errors, main, out_console, writing_errors
 from .inputs import recipe_overrides
 
 
@@ -50,6 +50,8 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
     with command_errors():
         if resume and out_dir is None:
             raise ValueError("--resume continues the lot whose checkpoint is in --out DIR: give --out")
+        if out_dir is not None:
+            check_out(out_dir)
         for option, value in (("--weight", weight), ("--drift-weight", drift_weight), ("--zone-weight", zone_weight)):
             if not 0 < value <= 1:
                 raise ValueError(f"{option} is an EWMA weight in (0, 1]; got {value!r}")
@@ -77,7 +79,8 @@ def lot_command(recipe, wafers, conditioning, control, weight, drift_weight, clo
                          model_pad_constants=model_constants, refit_model=refit_model,
                          metrology_noise=noise)
     if out_dir is not None:
-        write_lot(result, out_dir)
+        with writing_errors(out_dir):
+            write_lot(result, out_dir)
     if as_json:
         click.echo(result.to_json())
         return

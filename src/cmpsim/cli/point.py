@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from .group import _fail, _warn, command_errors, main, out_console
+from .group import _fail, _warn, check_out, command_errors, main, out_console, writing_errors
 from .inputs import config_options, load_config
 
 
@@ -38,12 +38,15 @@ def run(config, config_path, preset, assignments, grid, as_json, schema, out_dir
     except ValueError as exc:
         _fail(str(exc))
     with command_errors():
+        if out_dir:
+            check_out(out_dir)
         result = solve(cfg, check_roots=check_roots, relative=relative)
     schema = int(schema)
     if schema == 1:
         _warn("--schema 1 (the flat JSON of cmpsim 0.1) is deprecated and will be removed; use schema 2 (cmpsim/data/result.schema.json)")
     if out_dir:
-        write_outputs(result, Path(out_dir), schema=schema)
+        with writing_errors(out_dir):
+            write_outputs(result, Path(out_dir), schema=schema)
     if as_json:
         click.echo(result.to_json(schema=schema))
         return

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import click
 
-from .group import _rich_table, command_errors, main, out_console
+from .group import _rich_table, check_out, command_errors, main, out_console, writing_errors
 from .inputs import recipe_overrides
 
 
@@ -38,6 +38,8 @@ def polish_command(recipe, config_path, assignments, time_step, as_json, out_dir
     from ..polisher.recipe import read_recipe
 
     with command_errors():
+        if out_dir is not None:
+            check_out(out_dir)
         parsed = read_recipe(recipe)
         overrides = recipe_overrides(config_path, assignments)
         dt = to_si(time_step, "s", "--time-step", example="s")
@@ -52,7 +54,8 @@ def polish_command(recipe, config_path, assignments, time_step, as_json, out_dir
     if out_dir is not None:
         from ..polisher.report import write_outputs
 
-        write_outputs(result, out_dir)
+        with writing_errors(out_dir):
+            write_outputs(result, out_dir)
     if as_json:
         click.echo(result.to_json())
         return

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from .group import _fail, _warn, main
+from .group import _fail, _warn, check_out, main
 
 
 @main.command(name="sweep")
@@ -41,6 +41,10 @@ def sweep_command(sweep_file, out_path, workers, scheduler, resume, max_points, 
     except ValueError as exc:
         _fail(str(exc))
     out = Path(out_path) if out_path else Path.cwd() / (Path(sweep_file).stem + ".nc")
+    try:
+        check_out(out)
+    except ValueError as exc:
+        _fail(str(exc))
     where = f"Dask cluster at {scheduler}" if scheduler else ("this process (no Dask)" if workers == 0 else "a local Dask cluster")
     click.echo(f"sweep: {spec.n_points} points ({' x '.join(f'{d} {n}' for d, n in zip(spec.dims, spec.shape))}) on {where} -> {out}")
     for message in spec.invalid_values():

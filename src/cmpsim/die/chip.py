@@ -258,9 +258,11 @@ def read_stack(path) -> tuple[list[StackLevel], dict]:
     p = Path(path)
     if not p.is_file():
         raise ValueError(f"--stack {str(p)!r} is not a file")
+    from ..io import read_text
+
     try:
-        data = tomllib.loads(p.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        data = tomllib.loads(read_text(p, "--stack file"))  # a file not in UTF-8: its line and byte named
+    except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"--stack {p.name} is not valid TOML: {exc}") from None
     unknown = set(data) - _STACK_KEYS
     if unknown:
@@ -271,6 +273,8 @@ def read_stack(path) -> tuple[list[StackLevel], dict]:
     levels, names = [], set()
     for i, lv in enumerate(raw):
         where = f"--stack {p.name}, level {i + 1}"
+        if not isinstance(lv, dict):
+            raise ValueError(f"{where}: a level is a [[level]] table (name, layers, process); got {lv!r}")
         for key in ("name", "layers", "process"):
             if key not in lv:
                 raise ValueError(f"{where}: missing {key!r} (each [[level]] needs name, layers, process)")
@@ -301,6 +305,10 @@ def read_stack(path) -> tuple[list[StackLevel], dict]:
         options["layer_map"] = str(p.parent / options["layer_map"])  # relative to the stack file
     if "spec" in options and not isinstance(options["spec"], dict):
         raise ValueError(f"--stack {p.name}: [spec] must be a table, e.g. thickness = \"5 nm\"")
+    if "spec" in options:  # checked here, so that a bad limit is named as the file's, not as --spec
+        from .hotspots import parse_spec
+
+        parse_spec(options["spec"], what=f"--stack {p.name}: [spec]")
     return levels, options
 
 

@@ -33,8 +33,9 @@ SPEC_KINDS = {
 }
 
 
-def parse_spec(spec) -> dict[str, float]:
-    """Limits (m) from ``{"kind": "5 nm" or 5e-9}`` or ``["kind=5nm", ...]``; ValueError naming ``--spec``."""
+def parse_spec(spec, what: str = "--spec") -> dict[str, float]:
+    """Limits (m) from ``{"kind": "5 nm" or 5e-9}`` or ``["kind=5nm", ...]``; ValueError naming ``what``
+    (``--spec``, or e.g. a stack file's ``[spec]`` table)."""
     from ..inputs.units import to_si
 
     if spec is None:
@@ -51,10 +52,12 @@ def parse_spec(spec) -> dict[str, float]:
     out = {}
     for kind, value in items:
         if kind not in SPEC_KINDS:
-            raise ValueError(f"--spec {kind!r} is not a quantity with a limit; valid: {', '.join(SPEC_KINDS)}")
-        limit = to_si(value, "m", f"--spec {kind}", "5 nm")
+            from ..inputs.param import did_you_mean
+
+            raise ValueError(f"{what} {kind!r} is not a quantity with a limit{did_you_mean(kind, SPEC_KINDS)}; valid: {', '.join(SPEC_KINDS)}")
+        limit = to_si(value, "m", f"{what} {kind}", "5 nm")
         if not (np.isfinite(limit) and limit > 0):
-            raise ValueError(f"--spec {kind} = {value!r} must be a length > 0")
+            raise ValueError(f"{what} {kind} = {value!r} must be a length > 0")
         out[kind] = float(limit)
     return out
 

@@ -28,7 +28,7 @@ from .derived import zone_mean_pressure
 from ..numerics.grid import GRID_EDGE, GRID_PRESETS
 from ..physics.chemistry import input_names as chemistry_input_names
 from ..physics.materials import ABRASIVES, FILMS, krieger_dougherty, volume_fraction
-from .param import Param
+from .param import Param, did_you_mean
 
 __all__ = [
     "Param",
@@ -316,7 +316,8 @@ def _check_carrier(c: "Config") -> None:
 def parameter(name: str) -> Param:
     """The registry entry of input ``name``; ``ValueError`` listing the known names if there is none."""
     if name not in PARAMETERS:
-        raise ValueError(f"unknown parameter {name!r}; known: {', '.join(sorted(PARAMETERS))}")
+        hint = did_you_mean(name, PARAMETERS)
+        raise ValueError(f"unknown parameter {name!r}" + (f"{hint} (cmpsim params lists the inputs)" if hint else f"; known: {', '.join(sorted(PARAMETERS))}"))
     return PARAMETERS[name]
 
 
@@ -327,6 +328,11 @@ def parse_value(name: str, value: Any) -> Any:
     (taken as SI). Raises ``ValueError`` naming the parameter and its valid range.
     """
     return units.parse(parameter(name), value)
+
+
+#: The keys of a process file's [calibration] table (:mod:`cmpsim.calibration.processfile` writes them).
+_CALIBRATION_KEYS = frozenset({"constants", "settings", "data", "chi2_before", "chi2_after", "dof", "rms_before", "rms_after",
+                               "identifiability", "ci95", "stderr", "correlation", "pad", "die", "padlife"})
 
 
 def _section_fields(section: str) -> list[str]:
@@ -454,17 +460,27 @@ class Config:
         calibration = data.pop("calibration", None)  # a process file's record of its calibration: metadata, not inputs
         if calibration is not None and not isinstance(calibration, dict):
             raise ValueError(f"calibration must be the [calibration] table of a process file (cmpsim calibrate); got {calibration!r}")
+        stray = sorted(set(calibration or {}) - _CALIBRATION_KEYS)
+        if stray:  # e.g. a version key of a newer cmpsim's file, or a hand edit: nothing would read it
+            raise ValueError(f"[calibration]: unknown key(s) {', '.join(stray)}; this cmpsim writes and reads {', '.join(sorted(_CALIBRATION_KEYS))}")
         if "preset" in data:
             base = cls.preset(str(data.pop("preset")))
         for key, value in data.items():
             if key in _SECTIONS and isinstance(value, dict):
                 for k, v in value.items():
                     if k not in PARAMETERS:
-                        raise ValueError(f"unknown parameter {k!r} in [{key}]; known: {', '.join(_section_fields(key))}")
+                        hint = did_you_mean(k, PARAMETERS)
+                        raise ValueError(f"unknown parameter {k!r} in [{key}]" + (hint or f"; known: {', '.join(_section_fields(key))}"))
                     if PARAMETERS[k].section != key:
                         raise ValueError(f"parameter {k!r} belongs in [{PARAMETERS[k].section}], not [{key}]")
+                    if k in flat:  # set at the top level too: one of the two would be dropped without a word
+                        raise ValueError(f"parameter {k!r} is set twice, at the top level and in [{key}]; keep one")
                     flat[k] = v
+            elif isinstance(value, dict) and key not in PARAMETERS:  # a misspelt section: say so, not "unknown parameter"
+                raise ValueError(f"unknown parameter {key!r}: [{key}] is not a section{did_you_mean(key, _SECTIONS)}; the sections are {', '.join(f'[{s}]' for s in _SECTIONS)}")
             else:
+                if key in flat:
+                    raise ValueError(f"parameter {key!r} is set twice, in [{PARAMETERS[key].section}] and at the top level; keep one")
                 flat[key] = value
         return (base or cls.default()).replace(**flat)
 

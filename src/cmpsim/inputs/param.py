@@ -15,7 +15,15 @@ from typing import Any
 from . import units
 from ..numerics.grid import GRID_PRESETS
 
-__all__ = ["Param"]
+__all__ = ["Param", "did_you_mean"]
+
+
+def did_you_mean(name: str, names) -> str:
+    """"; did you mean X?" naming the entries of ``names`` close to a misspelt ``name`` ("" when none is close)."""
+    import difflib
+
+    near = difflib.get_close_matches(str(name), [str(n) for n in names], n=3)
+    return f"; did you mean {', '.join(near)}?" if near else ""
 
 
 @dataclass(frozen=True)

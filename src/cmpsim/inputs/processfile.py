@@ -26,12 +26,21 @@ def process_constants(path) -> dict:
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"config file {str(path)!r} is not valid TOML: {exc}") from None
     table = data.get("calibration")
-    config = Config.from_mapping(data)  # every value checked
+    try:
+        config = Config.from_mapping(data)  # every value checked
+    except ValueError as exc:  # say which file holds the bad key or value, as Config.from_toml does
+        raise ValueError(f"config file {str(path)!r}: {exc}") from None
     if isinstance(table, dict):
         names = list(table.get("settings", [])) + list(table.get("constants", []))
         unknown = [n for n in names if n not in PARAMETERS]
         if unknown:
             raise ValueError(f"config file {str(path)!r}: [calibration] names unknown inputs {', '.join(unknown)}")
+        given = {k for k, v in data.items() if k != "calibration" and not isinstance(v, dict)}
+        given |= {k for v in data.values() if isinstance(v, dict) for k in v}
+        absent = [n for n in names if n not in given]
+        if absent:  # a fitted constant taken out of the file by hand: the default would stand in for it silently
+            raise ValueError(f"config file {str(path)!r}: [calibration] lists {', '.join(absent)}, which the file does not set "
+                             f"(put back {PARAMETERS[absent[0]].section}.{absent[0]} = its fitted value in SI, or rerun cmpsim calibrate)")
         return {n: getattr(config, n) for n in names}
     named = []
     for key, value in data.items():

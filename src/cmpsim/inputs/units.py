@@ -242,6 +242,8 @@ def _refuse_misread(text: str, name: str) -> None:
                "write one number and its unit")
         raise ValueError(f"{name}: {text!r} holds the character {dropped!r} (U+{ord(dropped):04X}), which the unit parser would drop "
                          f"without a word ('\u22123 psi' would read as 3 psi, '<5 psi' as 5 psi); {why}")
+    if not text.strip():  # `--set applied_pressure=` or `x = ""`: pint says "cannot be an empty string"
+        raise ValueError(f"{name} is empty; give a value with its unit")
     if "," in text or re.search(r"[0-9]_[0-9]", text):
         raise ValueError(f"{name}: {text!r} has a {'comma' if ',' in text else 'digit separator'}: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "

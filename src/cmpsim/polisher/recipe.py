@@ -38,6 +38,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..inputs.config import PARAMETERS, PRESETS, Config
+from ..inputs.param import did_you_mean
 from ..inputs.units import to_si
 from ..io import read_text
 from ..physics.films import FILM_CONSTANTS
@@ -48,6 +49,7 @@ __all__ = ["RecipeError", "Film", "Step", "Target", "Recipe", "parse_recipe", "r
 
 #: Keys of a [[step]] table that are not cmpsim inputs.
 STEP_KEYS = ("name", "time", "until", "max_time", "endpoint_fraction")
+_TOP_KEYS = ("preset", "film", "step", "target", "conditioning", "conditioner")
 #: Share of the wafer area on which the top film must be cleared at the end point, by default.
 DEFAULT_ENDPOINT_FRACTION = 0.95
 #: Materials a [[film]] may name: those the removal law knows (cmpsim.physics.materials.FILMS) that
@@ -238,9 +240,10 @@ def parse_recipe(text: str, source: str = "recipe") -> Recipe:
     inputs = []
     for name, value in data.items():
         if isinstance(value, dict):
-            raise RecipeError(f"{source}: unknown table [{name}]; a recipe has [[film]], [[step]], [target] and [conditioner] tables")
+            raise RecipeError(f"{source}: unknown table [{name}]{did_you_mean(name, _TOP_KEYS)}; a recipe has [[film]], [[step]], [target] and [conditioner] tables")
         if name not in PARAMETERS:
-            raise RecipeError(f"{source}: unknown input {name!r}{at(name)} (cmpsim params lists the inputs)")
+            where_else = " (it goes in a [[step]] table)" if name in STEP_KEYS else did_you_mean(name, list(PARAMETERS) + list(_TOP_KEYS))
+            raise RecipeError(f"{source}: unknown input {name!r}{at(name)}{where_else} (cmpsim params lists the inputs)")
         inputs.append((name, value))
     try:
         base = Config.preset(preset) if preset else Config.default()
@@ -278,9 +281,13 @@ def parse_recipe(text: str, source: str = "recipe") -> Recipe:
         raise RecipeError(f"{source}: no [[step]] table: a recipe needs at least one step (name, time = \"60 s\" or until = \"endpoint\" with max_time)")
     steps = []
     endpoints = 0
+    named = {}
     for i, (raw, (line, keys)) in enumerate(zip(steps_raw, lines["step"] + [(None, {})] * len(steps_raw)), start=1):
         name = str(raw.get("name", f"step {i}"))
         label = _label("step", i, name, line)
+        if name in named:  # the outputs (thickness.csv's columns, polish.json) name the steps: two alike would be one
+            raise RecipeError(f"{source}: {label}: the name {name!r} is already step {named[name]}'s; give every step its own name")
+        named[name] = i
 
         def where(key, keys=keys):
             return f" (line {keys[key]})" if key in keys else ""
@@ -292,7 +299,8 @@ def parse_recipe(text: str, source: str = "recipe") -> Recipe:
             if key == "film":
                 raise RecipeError(f"{source}: {label}: film{where('film')} is set by the stack: the film of each solve is the material exposed ([[film]] tables)")
             if key not in PARAMETERS:
-                raise RecipeError(f"{source}: {label}: unknown input {key!r}{where(key)} (cmpsim params lists the inputs)")
+                hint = did_you_mean(key, list(PARAMETERS) + list(STEP_KEYS))
+                raise RecipeError(f"{source}: {label}: unknown input {key!r}{where(key)}{hint} (cmpsim params lists the inputs)")
             own.append((key, value))
         try:
             base.replace(**dict(own))
@@ -340,7 +348,7 @@ def parse_recipe(text: str, source: str = "recipe") -> Recipe:
     # ---- target
     target = Target()
     if target_raw is not None:
-        if not isinstance(target_raw, dict) or set(target_raw) - {"remaining"}:
+        if not isinstance(target_raw, dict) or set(target_raw) - {"remaining"} or not target_raw:
             raise RecipeError(f"{source}: [target] takes remaining (e.g. remaining = \"500 nm\"); got {target_raw!r}")
         if "remaining" in target_raw:
             try:

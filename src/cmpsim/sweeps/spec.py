@@ -20,16 +20,24 @@ import numpy as np
 
 from ..inputs import units
 from ..inputs.config import PARAMETERS, Config, parse_value
+from ..inputs.param import did_you_mean
 
 __all__ = ["Axis", "SweepSpec", "SweepError", "DEFAULT_MAX_POINTS"]
 
 #: Largest number of points a sweep may have unless ``max_points`` says otherwise.
 DEFAULT_MAX_POINTS = 10_000
+#: Largest ``num`` of one range: more values than any sweep runs (each is 8 bytes before the size check).
+_MAX_RANGE_NUM = 10_000_000
 _SECTIONS = ("wafer", "process", "slurry", "pad", "numerics")
 
 
 class SweepError(ValueError):
     """A bad sweep file or sweep option; raised before any point is computed."""
+
+
+def _unknown(name: str) -> str:
+    """The hint after "unknown setting NAME": close names, and where the names are listed."""
+    return f"{did_you_mean(name, PARAMETERS)} (see `cmpsim params` for the names)"
 
 
 def _is_string_param(name: str) -> bool:
@@ -44,7 +52,7 @@ def _si_value(name: str, value: Any, where: str) -> Any:
     message of :func:`cmpsim.inputs.config.parse_value`, not dropped and not fatal.
     """
     if name not in PARAMETERS:
-        raise SweepError(f"{where}: unknown setting {name!r} (see `cmpsim params` for the names)")
+        raise SweepError(f"{where}: unknown setting {name!r}{_unknown(name)}")
     p = PARAMETERS[name]
     if _is_string_param(name):
         if not isinstance(value, str):
@@ -92,7 +100,7 @@ class Axis:
 def _parse_axis(name: str, spec: Any, where: str) -> Axis:
     w = f"{where} [axes] {name}"
     if name not in PARAMETERS:
-        raise SweepError(f"{where}: unknown setting {name!r} in [axes] (see `cmpsim params` for the names)")
+        raise SweepError(f"{where}: unknown setting {name!r} in [axes]{_unknown(name)}")
     if isinstance(spec, list):
         if not spec:
             raise SweepError(f"{w}: the axis is empty; give at least one value")
@@ -111,6 +119,9 @@ def _parse_axis(name: str, spec: Any, where: str) -> Axis:
             raise SweepError(f"{w}: num must be an integer; got {num!r}")
         if num < 1:
             raise SweepError(f"{w}: the axis is empty (num = {num}); num must be >= 1")
+        if num > _MAX_RANGE_NUM:
+            raise SweepError(f"{w}: num = {num} is more values than a sweep runs (at most {DEFAULT_MAX_POINTS} points by default, "
+                             f"--max-points / max_points=); num must be <= {_MAX_RANGE_NUM}")
         start = _si_value(name, spec["start"], w + ".start")
         stop = _si_value(name, spec["stop"], w + ".stop")
         scale = spec.get("scale", "linear")
@@ -125,10 +136,18 @@ def _parse_axis(name: str, spec: Any, where: str) -> Axis:
         values = tuple(float(x) for x in arr)
     else:
         raise SweepError(f"{w}: expected a list of values or a range {{start, stop, num}}; got {spec!r}")
-    for i, v in enumerate(values):
-        if _find(values[:i], v) is not None:
-            raise SweepError(f"{w}: the value {v!r} appears twice (after conversion to SI)")
+    _refuse_repeats(values, w, isinstance(spec, dict))
     return Axis(name, values)
+
+
+def _refuse_repeats(values: tuple, w: str, is_range: bool) -> None:
+    """SweepError if a value of an axis appears twice (equal to 1e-12 relative, as :func:`_same`);
+    sorted neighbours are compared, so a range of a million values is checked in a second, not hours."""
+    keyed = sorted(values, key=lambda v: (isinstance(v, str), v if isinstance(v, str) else float(v)))
+    for a, b in zip(keyed, keyed[1:]):
+        if isinstance(a, str) == isinstance(b, str) and _same(a, b):
+            hint = " (a range whose start equals its stop gives one value: use num = 1)" if is_range else ""
+            raise SweepError(f"{w}: the value {b!r} appears twice (after conversion to SI){hint}")
 
 
 @dataclass(frozen=True)
@@ -176,9 +195,10 @@ class SweepSpec:
             elif k in _SECTIONS and isinstance(v, Mapping):
                 for kk in v:
                     if kk not in PARAMETERS:
-                        raise SweepError(f"{where}: unknown setting {kk!r} in [base.{k}] (see `cmpsim params`)")
+                        raise SweepError(f"{where}: unknown setting {kk!r} in [base.{k}]{_unknown(kk)}")
             elif k not in PARAMETERS:
-                raise SweepError(f"{where}: unknown setting {k!r} in [base] (see `cmpsim params` for the names)")
+                near = did_you_mean(k, _SECTIONS) if isinstance(v, Mapping) else ""
+                raise SweepError(f"{where}: unknown setting {k!r} in [base]{near or _unknown(k)}")
         try:
             base = Config.from_mapping(dict(base_data))
         except ValueError as exc:

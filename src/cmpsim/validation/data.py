@@ -411,10 +411,9 @@ def film_hint(text: str) -> str:
 
 def _near(name: str, names) -> str:
     """"; did you mean X?" for the names close to a misspelt ``name`` ("" when none is close)."""
-    import difflib
+    from ..inputs.param import did_you_mean
 
-    near = difflib.get_close_matches(name, list(names), n=3)
-    return f"; did you mean {', '.join(near)}?" if near else ""
+    return did_you_mean(name, names)
 
 
 def _one_unit(ds: Dataset) -> None:
