@@ -4,8 +4,6 @@ naming the file and key, exit status 2 and nothing written. Fast: no case solves
 
 from __future__ import annotations
 
-import time
-
 import pytest
 from click.testing import CliRunner
 
@@ -14,6 +12,15 @@ from cmpsim.inputs.config import Config
 from cmpsim.inputs.processfile import process_constants
 from cmpsim.polisher.recipe import RecipeError, parse_recipe
 from cmpsim.sweeps import SweepError, SweepSpec
+
+
+def _refused_saying(error, call, words):
+    """Assert ``call()`` raises ``error`` with every one of ``words`` in its message."""
+    with pytest.raises(error) as info:
+        call()
+    for w in words:
+        assert w in str(info.value), (w, str(info.value))
+
 
 FILM = 'preset = "300mm"\n[[film]]\nmaterial = "oxide"\nthickness = "1 um"\n'
 STEP = '[[step]]\nname = "a"\ntime = "10 s"\n'
@@ -33,10 +40,7 @@ STEP = '[[step]]\nname = "a"\ntime = "10 s"\n'
     ],
 )
 def test_recipe_mistakes_are_refused_with_a_hint(text, words):
-    with pytest.raises(RecipeError) as info:
-        parse_recipe(text, "r.toml")
-    for w in words:
-        assert w in str(info.value), (w, str(info.value))
+    _refused_saying(RecipeError, lambda: parse_recipe(text, "r.toml"), words)
 
 
 def test_a_recipe_of_two_steps_of_one_name_writes_nothing(tmp_path):
@@ -70,11 +74,9 @@ def test_a_huge_range_is_refused_in_a_second_not_checked_for_hours():
     """num = 100000 on two axes hung (a quadratic check of repeated values) before the size check."""
     data = {"base": {"grid": "coarse"}, "axes": {"applied_pressure": {"start": "2 psi", "stop": "3 psi", "num": 100_000},
                                                  "rotation_speed": {"start": "30 rpm", "stop": "60 rpm", "num": 100_000}}}
-    t0 = time.perf_counter()
-    spec = SweepSpec.from_mapping(data)
+    spec = SweepSpec.from_mapping(data)  # hung for hours before (no time is asserted: a regression hangs the suite)
     with pytest.raises(SweepError, match="10000000000 points"):
         spec.check_size()
-    assert time.perf_counter() - t0 < 1.5
     with pytest.raises(SweepError, match="num must be <= 10000000"):
         SweepSpec.from_mapping({"axes": {"applied_pressure": {"start": 1, "stop": 2, "num": 10**12}}})
 
@@ -89,10 +91,7 @@ def test_a_huge_range_is_refused_in_a_second_not_checked_for_hours():
     ],
 )
 def test_sweep_axis_mistakes(axes, words):
-    with pytest.raises(SweepError) as info:
-        SweepSpec.from_mapping({"axes": axes})
-    for w in words:
-        assert w in str(info.value), (w, str(info.value))
+    _refused_saying(SweepError, lambda: SweepSpec.from_mapping({"axes": axes}), words)
 
 
 # ---------------------------------------------------------------------------- process files
@@ -135,10 +134,7 @@ def test_hand_edited_die_uncertainty_is_refused(tmp_path, uncertainty, words):
 
     p = tmp_path / "cal.toml"
     p.write_text(DIE + "[calibration.die.uncertainty]\n" + uncertainty + "\n")
-    with pytest.raises(ValueError) as info:
-        die_constants(p)
-    for w in words:
-        assert w in str(info.value), (w, str(info.value))
+    _refused_saying(ValueError, lambda: die_constants(p), words)
 
 
 # ---------------------------------------------------------------------------- stack files
@@ -155,10 +151,7 @@ def test_stack_file_mistakes(tmp_path, text, words):
 
     p = tmp_path / "s.toml"
     p.write_text(text)
-    with pytest.raises(ValueError) as info:
-        read_stack(p)
-    for w in words:
-        assert w in str(info.value), (w, str(info.value))
+    _refused_saying(ValueError, lambda: read_stack(p), words)
 
 
 def test_a_stack_file_not_in_utf8_names_its_line(tmp_path):
@@ -181,17 +174,20 @@ def test_a_stack_file_not_in_utf8_names_its_line(tmp_path):
         ["die", "uniform", "--grid", "coarse"],
     ],
 )
-def test_an_out_that_cannot_be_made_is_refused_before_the_solve(tmp_path, args):
-    """It was a NotADirectoryError traceback (status 1) after the solve."""
+def test_an_out_that_cannot_be_made_is_refused_before_the_solve(tmp_path, args, monkeypatch):
+    """It was a NotADirectoryError traceback (status 1) after the solve: no wafer equilibrium is started now."""
+    import cmpsim.solver.equilibrium as eq
+
+    started, solve = [], eq._from_start
+    monkeypatch.setattr(eq, "_from_start", lambda *a, **k: started.append(1) or solve(*a, **k))
     (tmp_path / "r.toml").write_text(FILM + STEP)
     (tmp_path / "s.toml").write_text('[axes]\napplied_pressure = ["2 psi"]\n')
     (tmp_path / "afile").write_text("")
     args = [str(tmp_path / "r.toml") if a == "RECIPE" else str(tmp_path / "s.toml") if a == "SWEEP" else a for a in args]
     out = tmp_path / "afile" / ("x.nc" if args[0] == "sweep" else "x")
-    t0 = time.perf_counter()
     r = CliRunner().invoke(main, [*args, "--out", str(out)])
     assert r.exit_code == 2 and "is a file, not a directory" in r.output, r.output
-    assert time.perf_counter() - t0 < 2.0
+    assert not started
 
 
 def test_an_empty_value_says_it_is_empty():
