@@ -236,10 +236,9 @@ def test_a_body_over_the_size_limit_is_413_declared_or_streamed(client):
 
 
 def test_a_sweep_larger_than_the_limit_is_refused_before_any_work(client):
-    t0 = time.perf_counter()
+    # refused as read (num above 10 million): nothing of size 1e9 is built (no time asserted: building it would exhaust memory)
     r = client.post("/api/sweeps", json={"axes": {"applied_pressure": {"start": "2 psi", "stop": "6 psi", "num": 10**9}}})
     assert r.status_code == 422 and r.json()["parameter"] == "applied_pressure"
-    assert time.perf_counter() - t0 < 5  # nothing of size 1e9 was built
     r = client.post("/api/sweeps", json={"axes": {"applied_pressure": ["2 psi", "3 psi", "4 psi", "5 psi", "6 psi"], "rotation_speed": {"start": "30 rpm", "stop": "90 rpm", "num": 5}}})
     assert r.status_code == 422 and "more than the maximum of 20" in r.json()["detail"]
     r = client.post("/api/sweeps", json={"base": {"grid": "fine"}, "axes": {"applied_pressure": ["2 psi"]}})
