@@ -111,18 +111,21 @@ def _layer_box(cell: kdb.Cell, layer_indexes) -> kdb.Box:
     return box
 
 
+def _array_translations(inst: kdb.Instance, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """(len(i) * len(j), 2) translations (dbu) of the elements of a regular array at every pair of
+    indices ``i`` along its vector a and ``j`` along b, ``i`` outer."""
+    d, a, b = inst.trans.disp, inst.a, inst.b
+    ii, jj = np.meshgrid(np.asarray(i, dtype=np.int64), np.asarray(j, dtype=np.int64), indexing="ij")
+    ii, jj = ii.ravel(), jj.ravel()
+    return np.stack([d.x + ii * a.x + jj * b.x, d.y + ii * a.y + jj * b.y], axis=1)
+
+
 def _instance_translations(inst: kdb.Instance) -> np.ndarray:
     """(n, 2) translations of every placement of an instance (arrays expanded)."""
-    d = inst.trans.disp
-    base = np.array([[d.x, d.y]], dtype=np.int64)
     if not inst.is_regular_array():
-        return base
-    a, b = inst.a, inst.b
-    i = np.arange(max(inst.na, 1), dtype=np.int64)
-    j = np.arange(max(inst.nb, 1), dtype=np.int64)
-    ii, jj = np.meshgrid(i, j, indexing="ij")
-    off = np.stack([ii.ravel() * a.x + jj.ravel() * b.x, ii.ravel() * a.y + jj.ravel() * b.y], axis=1)
-    return base + off
+        d = inst.trans.disp
+        return np.array([[d.x, d.y]], dtype=np.int64)
+    return _array_translations(inst, np.arange(max(inst.na, 1)), np.arange(max(inst.nb, 1)))
 
 
 def _tile_counts(inst: kdb.Instance, span: int) -> tuple[int, int] | None:
@@ -155,7 +158,6 @@ def array_tiles(layout: kdb.Layout, inst: kdb.Instance, counts: tuple[int, int],
     k1, k2 = counts
     a, b = inst.a, inst.b
     rot = kdb.Trans(inst.trans.rot, inst.trans.is_mirror(), 0, 0)
-    d = inst.trans.disp
     out = []
     for n1, s1 in ((k1, np.arange(0, inst.na - k1 + 1, k1)), (inst.na % k1, np.array([inst.na - inst.na % k1]))):
         for n2, s2 in ((k2, np.arange(0, inst.nb - k2 + 1, k2)), (inst.nb % k2, np.array([inst.nb - inst.nb % k2]))):
@@ -166,10 +168,7 @@ def array_tiles(layout: kdb.Layout, inst: kdb.Instance, counts: tuple[int, int],
                 tile = layout.create_cell(f"$cmpsim$tile${len(made)}")
                 tile.insert(kdb.CellInstArray(inst.cell_index, rot, a, b, n1, n2))
                 made[key] = tile.cell_index()
-            i, j = np.meshgrid(s1.astype(np.int64), s2.astype(np.int64), indexing="ij")
-            i, j = i.ravel(), j.ravel()
-            t = np.stack([d.x + i * a.x + j * b.x, d.y + i * a.y + j * b.y], axis=1)
-            out.append((made[key], t))
+            out.append((made[key], _array_translations(inst, s1, s2)))
     return out
 
 
