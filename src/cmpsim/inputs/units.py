@@ -76,7 +76,7 @@ def value_and_unit(value: str, unit: str) -> tuple[str, str]:
 
     Raises ``ValueError`` when the cell's unit and the unit column disagree (the value is not guessed).
     """
-    if re.search(r"[0-9]_[0-9]", value):  # Python's float() reads "1_497" as 1497: a separator, refused as a comma is
+    if _DIGIT_SEPARATOR.search(value):  # Python's float() reads "1_497" as 1497: a separator, refused as a comma is
         raise ValueError(f"{value!r} is not a number (a thousands separator? write the number with a decimal point and no separator)")
     m = _NUMBER.match(value)
     if not m or not m.group(2).strip():
@@ -204,6 +204,11 @@ def _quantity_to_si(value: Any, unit: str, name: str, example: str | None) -> fl
     return out
 
 
+#: Typographic minus signs and dashes that ``float`` refuses and pint drops ("\u22123 psi" read as 3 psi).
+_MINUS_SIGNS = "\u2212\u2013\u2014\u2012\ufe63\uff0d"
+#: A digit separator between digits ("1_497"), which ``float`` and pint read as if absent.
+_DIGIT_SEPARATOR = re.compile(r"[0-9]_[0-9]")
+
 #: Cells that stand for "no value" in spreadsheets and papers (lower case): refused with :func:`placeholder_hint`.
 PLACEHOLDERS = ("-", "--", "\u2013", "\u2014", "n/a", "na", "n.a.", "none", "null", "?", "nd", "n.d.")
 
@@ -212,7 +217,7 @@ def placeholder_hint(text: str) -> str:
     """" (... leave the cell empty ...)" for a cell that stands for no value (``-``, ``n/a``), " (... written '-')" for
     a number with a typographic minus (``\u22121.5``, which ``float`` refuses); "" for any other text."""
     if text.strip().lower() not in PLACEHOLDERS:
-        return " (its minus sign is typographic: write '-')" if text.strip()[:1] in "\u2212\u2013\u2014\u2012\ufe63\uff0d" and text.strip()[1:] else ""
+        return " (its minus sign is typographic: write '-')" if text.strip()[:1] in _MINUS_SIGNS and text.strip()[1:] else ""
     return (f" ({text.strip()!r} stands for no value: leave the cell empty where the column is optional and the value not known, "
             "or leave out the row)")
 
@@ -237,14 +242,14 @@ def _refuse_misread(text: str, name: str) -> None:
     dash: ``"\u22123 psi"`` read as 3 psi; a bound or an approximation: ``"<5 psi"``, ``"~5 psi"`` read as 5 psi)."""
     dropped = next((c for c in text if not (c.isalnum() or c.isspace() or c in _QUANTITY_MARKS)), None)
     if dropped is not None and text.strip().lower() not in PLACEHOLDERS:
-        why = ("a minus sign is written '-'" if dropped in "\u2212\u2013\u2014\u2012\ufe63\uff0d" else
+        why = ("a minus sign is written '-'" if dropped in _MINUS_SIGNS else
                "a bound or an approximate value is not a value: write the number itself" if dropped in "<>~\u2248\u2264\u2265\u2272\u2273" else
                "write one number and its unit")
         raise ValueError(f"{name}: {text!r} holds the character {dropped!r} (U+{ord(dropped):04X}), which the unit parser would drop "
                          f"without a word ('\u22123 psi' would read as 3 psi, '<5 psi' as 5 psi); {why}")
     if not text.strip():  # `--set applied_pressure=` or `x = ""`: pint says "cannot be an empty string"
         raise ValueError(f"{name} is empty; give a value with its unit")
-    if "," in text or re.search(r"[0-9]_[0-9]", text):
+    if "," in text or _DIGIT_SEPARATOR.search(text):
         raise ValueError(f"{name}: {text!r} has a {'comma' if ',' in text else 'digit separator'}: a decimal comma ('3,5') or a thousands separator ('1,500') is not read "
                          "(it would be dropped: '3,5 psi' read as 35 psi); write the number with a decimal point and no separator "
                          "('3.5 psi', '1500 nm')")
