@@ -10,7 +10,7 @@ import os
 import tempfile
 from pathlib import Path
 
-__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint", "fields_hint"]
+__all__ = ["atomic_write_text", "atomic_path", "read_text", "comments_and_rows", "tidy_csv", "delimiter_hint", "fields_hint", "repeated_columns"]
 
 
 @contextlib.contextmanager
@@ -196,6 +196,11 @@ def _csv_line(values) -> str:
     buf = io.StringIO()
     csv.writer(buf, lineterminator="").writerow(values)
     return buf.getvalue()
+
+
+def repeated_columns(header: list[str]) -> list[str]:
+    """The names a CSV ``header`` holds more than once, sorted ([] when none): a row's dict would keep the last."""
+    return sorted({h for h in header if header.count(h) > 1})
 
 
 def fields_hint(row: list[str], header: list[str]) -> str:

@@ -98,13 +98,13 @@ def _whole(text: str) -> int:
 def read_lot_rows(path, text: str) -> list[LotRecord]:
     """The lot rows of ``text`` (the CSV content of the file ``path``; its comment lines give the ``dataset``), SI."""
     path = Path(path)
-    from ..io import comments_and_rows, tidy_csv
+    from ..io import comments_and_rows, repeated_columns, tidy_csv
 
     meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
         raise LotDataError(f"{path}: no header row and no data rows")
     header = [h.strip() for h in next(csv.reader([body[0][1]]))]
-    repeated = sorted({h for h in header if header.count(h) > 1})
+    repeated = repeated_columns(header)
     if repeated:  # the row's dict would keep the last of them silently
         raise LotDataError(f"{path}:{body[0][0]}: column {repeated[0]!r}: a column name is repeated in the header ({', '.join(header)})")
     for col in header:

@@ -189,7 +189,7 @@ def read_measurements(path, text: str | None = None) -> list:
     path = Path(path)
     if text is None:
         text = read_text(path, "measurement file", MeasurementError)
-    from ..io import comments_and_rows, delimiter_hint, fields_hint, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, fields_hint, repeated_columns, tidy_csv
 
     meta, body = comments_and_rows(tidy_csv(text, path))
     if not body:
@@ -200,8 +200,8 @@ def read_measurements(path, text: str | None = None) -> list:
     for required in ("quantity", "value"):  # the unit: a column, or after each value ("50 nm")
         if required not in header:
             raise MeasurementError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(htext))
-    if len(set(header)) != len(header):
-        twice = sorted({h for h in header if header.count(h) > 1})
+    twice = repeated_columns(header)
+    if twice:
         raise MeasurementError(f"{where0}: column {twice[0]!r}: a column name is repeated in the header ({', '.join(header)})")
     for col in header:
         if col in _COMMON or col in _STRUCTURE_COLUMNS or col in DIE_PARAMETERS or col in _THERMAL_EXTRA or col in PARAMETERS:

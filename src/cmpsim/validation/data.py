@@ -261,7 +261,7 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     Raises :class:`DataError` (a ValueError) naming the file, line and problem: missing
     required column, unknown quantity, comparison or condition column, bad number or unit.
     """
-    from ..io import comments_and_rows, delimiter_hint, fields_hint, read_text, tidy_csv
+    from ..io import comments_and_rows, delimiter_hint, fields_hint, read_text, repeated_columns, tidy_csv
 
     path = Path(path)
     if text is None:
@@ -275,8 +275,8 @@ def load_datasets(path, text: str | None = None) -> list[Dataset]:
     for required in ("quantity", "value"):  # the unit: a column, or after each value ("150 nm/min")
         if required not in header:
             raise DataError(f"{where0}: required column {required!r} is missing (header: {', '.join(header)})" + delimiter_hint(header_text))
-    if len(set(header)) != len(header):
-        twice = sorted({h for h in header if header.count(h) > 1})
+    twice = repeated_columns(header)
+    if twice:
         raise DataError(f"{where0}: header, column {twice[0]!r}: duplicate column names in the header ({', '.join(header)})")
     for col in header:
         if col in META_COLUMNS or col in EXTRA_CONDITIONS or col in POINT_COLUMNS:
