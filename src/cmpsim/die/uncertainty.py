@@ -54,7 +54,9 @@ class DieUncertainty:
                 raise ValueError(f"DieUncertainty: unknown die constant {n!r}; valid: {', '.join(valid)}")
             if not (math.isfinite(v) and v > 0):
                 raise ValueError(f"DieUncertainty: {n} = {v!r} must be > 0")
-        if not np.all(np.isfinite(cov)) or not np.allclose(cov, cov.T, rtol=1e-9, atol=1e-12 * max(1.0, float(np.abs(cov).max()))) or np.any(np.linalg.eigvalsh(0.5 * (cov + cov.T)) < -1e-12 * max(1.0, np.abs(cov).max())):
+        scale = max(1.0, float(np.abs(cov).max())) if np.all(np.isfinite(cov)) else math.nan
+        if not (math.isfinite(scale) and np.allclose(cov, cov.T, rtol=1e-9, atol=1e-12 * scale)
+                and not np.any(np.linalg.eigvalsh(0.5 * (cov + cov.T)) < -1e-12 * scale)):
             raise ValueError("DieUncertainty: the covariance must be finite, symmetric and positive semi-definite")
         object.__setattr__(self, "covariance", cov)
 
